@@ -1,0 +1,6 @@
+//! winged: a world model of Baumgart's winged-edge polyhedra.
+//!
+//! [`model`] is the geometric kernel: pure, synchronous Rust with no I/O. It can be used
+//! as a library on its own.
+
+pub mod model;

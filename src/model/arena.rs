@@ -1,0 +1,215 @@
+//! A compact slot arena for one kind of entity, with serial numbers and a serial index.
+//!
+//! Records live in a flat `Vec<T>`; a parallel `Vec<Serial>` holds each slot's serial
+//! number, with [`Serial::NONE`] marking a dead slot. Dead slots are reused (free list).
+//! The serial index is a vector of `(serial, slot)` pairs sorted by serial: new serials
+//! are always the largest yet issued, so making an entity appends. Killing an entity does
+//! not touch the index; a lookup checks that the slot still carries the serial it looks
+//! for, and the index is compacted when stale entries outnumber live ones.
+
+use super::ids::Serial;
+
+/// Slot storage for one kind of entity (faces, edges or vertices) of one body.
+#[derive(Clone, Debug)]
+pub struct Arena<T> {
+    items: Vec<T>,
+    serials: Vec<Serial>,
+    free: Vec<u32>,
+    live: usize,
+    index_serials: Vec<Serial>,
+    index_slots: Vec<u32>,
+}
+
+impl<T> Default for Arena<T> {
+    fn default() -> Self {
+        Self {
+            items: Vec::new(),
+            serials: Vec::new(),
+            free: Vec::new(),
+            live: 0,
+            index_serials: Vec::new(),
+            index_slots: Vec::new(),
+        }
+    }
+}
+
+impl<T> Arena<T> {
+    /// Number of live entities.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.live
+    }
+
+    /// Whether no entity lives here.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.live == 0
+    }
+
+    /// Number of slots, live or dead (slot ids are below this).
+    #[inline]
+    pub fn slots(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Whether slot `i` holds a live entity.
+    #[inline]
+    pub fn is_live(&self, i: usize) -> bool {
+        i < self.serials.len() && self.serials[i] != Serial::NONE
+    }
+
+    /// The record in slot `i`. Panics on an out-of-range slot.
+    #[inline]
+    pub fn get(&self, i: usize) -> &T {
+        &self.items[i]
+    }
+
+    /// The record in slot `i`, mutably.
+    #[inline]
+    pub fn get_mut(&mut self, i: usize) -> &mut T {
+        &mut self.items[i]
+    }
+
+    /// The serial number of slot `i` ([`Serial::NONE`] when dead).
+    #[inline]
+    pub fn serial(&self, i: usize) -> Serial {
+        self.serials.get(i).copied().unwrap_or(Serial::NONE)
+    }
+
+    /// Stores `item` under `serial` and returns its slot.
+    ///
+    /// Precondition: `serial` is not [`Serial::NONE`] and not already in this arena.
+    #[inline]
+    pub fn insert(&mut self, item: T, serial: Serial) -> u32 {
+        debug_assert!(serial != Serial::NONE);
+        self.live += 1;
+        let slot = match self.free.pop() {
+            Some(slot) => {
+                self.items[slot as usize] = item;
+                self.serials[slot as usize] = serial;
+                slot
+            }
+            None => {
+                self.items.push(item);
+                self.serials.push(serial);
+                (self.items.len() - 1) as u32
+            }
+        };
+        self.index_insert(serial, slot);
+        slot
+    }
+
+    /// Kills the entity in slot `i`; the slot may be reused.
+    ///
+    /// Precondition: slot `i` is live.
+    #[inline]
+    pub fn remove(&mut self, i: usize) {
+        debug_assert!(self.is_live(i));
+        self.serials[i] = Serial::NONE;
+        self.free.push(i as u32);
+        self.live -= 1;
+        if self.index_serials.len() > 2 * self.live + 64 {
+            self.compact_index();
+        }
+    }
+
+    /// The live slot carrying `serial`, if any.
+    pub fn find(&self, serial: Serial) -> Option<usize> {
+        let pos = self.index_serials.binary_search(&serial).ok()?;
+        let slot = self.index_slots[pos] as usize;
+        (self.serials[slot] == serial).then_some(slot)
+    }
+
+    /// Iterates the live slots in slot order.
+    pub fn live_slots(&self) -> impl Iterator<Item = usize> + '_ {
+        self.serials
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| **s != Serial::NONE)
+            .map(|(i, _)| i)
+    }
+
+    /// Bytes held by this arena's vectors (capacity, not just length).
+    pub fn heap_bytes(&self) -> usize {
+        self.items.capacity() * std::mem::size_of::<T>()
+            + self.serials.capacity() * 8
+            + self.free.capacity() * 4
+            + self.index_serials.capacity() * 8
+            + self.index_slots.capacity() * 4
+    }
+
+    /// Stores `item` under `serial` without keeping the index sorted; call
+    /// [`Self::resort_index`] after a batch of these. For moving many entities between
+    /// bodies at once.
+    pub(crate) fn insert_unsorted(&mut self, item: T, serial: Serial) -> u32 {
+        self.live += 1;
+        let slot = match self.free.pop() {
+            Some(slot) => {
+                self.items[slot as usize] = item;
+                self.serials[slot as usize] = serial;
+                slot
+            }
+            None => {
+                self.items.push(item);
+                self.serials.push(serial);
+                (self.items.len() - 1) as u32
+            }
+        };
+        self.index_serials.push(serial);
+        self.index_slots.push(slot);
+        slot
+    }
+
+    /// Drops stale index entries and sorts the index by serial.
+    pub(crate) fn resort_index(&mut self) {
+        self.compact_index();
+        let mut pairs: Vec<(Serial, u32)> = self
+            .index_serials
+            .iter()
+            .copied()
+            .zip(self.index_slots.iter().copied())
+            .collect();
+        pairs.sort_unstable_by_key(|p| p.0);
+        self.index_serials = pairs.iter().map(|p| p.0).collect();
+        self.index_slots = pairs.iter().map(|p| p.1).collect();
+    }
+
+    /// Reserves room for `n` more entities.
+    pub fn reserve(&mut self, n: usize) {
+        self.items.reserve(n);
+        self.serials.reserve(n);
+        self.index_serials.reserve(n);
+        self.index_slots.reserve(n);
+    }
+
+    fn index_insert(&mut self, serial: Serial, slot: u32) {
+        match self.index_serials.last() {
+            Some(&last) if last >= serial => {
+                // Only happens when entities move between bodies (glue, unglue):
+                // keep the index sorted.
+                let pos = self.index_serials.partition_point(|s| *s < serial);
+                self.index_serials.insert(pos, serial);
+                self.index_slots.insert(pos, slot);
+            }
+            _ => {
+                self.index_serials.push(serial);
+                self.index_slots.push(slot);
+            }
+        }
+    }
+
+    fn compact_index(&mut self) {
+        let serials = &self.serials;
+        let mut w = 0;
+        for r in 0..self.index_serials.len() {
+            let (s, slot) = (self.index_serials[r], self.index_slots[r]);
+            if serials[slot as usize] == s {
+                self.index_serials[w] = s;
+                self.index_slots[w] = slot;
+                w += 1;
+            }
+        }
+        self.index_serials.truncate(w);
+        self.index_slots.truncate(w);
+    }
+}

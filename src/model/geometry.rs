@@ -1,0 +1,184 @@
+//! Geometry derived from vertex loci: face planes (Newell's method), edge line
+//! coefficients, areas, volume, centroid, bounds and convexity.
+//!
+//! Everything here is computed on demand in the body's own frame; nothing is cached, so
+//! moving a vertex can never leave a stale plane behind.
+
+use glam::{DVec2, DVec3};
+
+use super::body::Body;
+use super::ids::{EdgeId, FaceId};
+
+/// A plane `normal · x = offset` with a unit `normal` (Baumgart's AA, BB, CC and KK).
+/// For a face, the normal points out of the solid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    /// Unit normal (AA, BB, CC).
+    pub normal: DVec3,
+    /// Distance of the plane from the origin along the normal (KK).
+    pub offset: f64,
+}
+
+impl Plane {
+    /// Signed distance of `p` from the plane: positive above (outside), negative below.
+    #[inline]
+    pub fn distance(&self, p: DVec3) -> f64 {
+        self.normal.dot(p) - self.offset
+    }
+}
+
+/// An axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    /// Smallest corner.
+    pub min: DVec3,
+    /// Largest corner.
+    pub max: DVec3,
+}
+
+impl Bounds {
+    /// The box's centre.
+    pub fn center(&self) -> DVec3 {
+        (self.min + self.max) * 0.5
+    }
+    /// The length of its diagonal.
+    pub fn diagonal(&self) -> f64 {
+        (self.max - self.min).length()
+    }
+}
+
+/// 2D line coefficients `aa·x + bb·y + cc = 0` of the line through `p1` and `p2`,
+/// normalised so that `aa·x + bb·y + cc` is the signed distance of a point from the line,
+/// positive on the left of a walker going from `p1` to `p2` (Baumgart's edge AA, BB, CC).
+/// `None` when the points coincide.
+pub fn line_coefficients(p1: DVec2, p2: DVec2) -> Option<(f64, f64, f64)> {
+    let (aa, bb, cc) = (p1.y - p2.y, p2.x - p1.x, p1.x * p2.y - p2.x * p1.y);
+    let l = (aa * aa + bb * bb).sqrt();
+    (l > 0.0).then(|| (aa / l, bb / l, cc / l))
+}
+
+impl Body {
+    /// Newell's area vector of face `f`: its direction is the outward normal and its
+    /// length twice the face's area. Right for concave and slightly non-planar faces.
+    pub fn newell(&self, f: FaceId) -> DVec3 {
+        let mut n = DVec3::ZERO;
+        for u in self.face_uses(f) {
+            let a = self.position(self.origin(u));
+            let b = self.position(self.dest(u));
+            n += DVec3::new(
+                (a.y - b.y) * (a.z + b.z),
+                (a.z - b.z) * (a.x + b.x),
+                (a.x - b.x) * (a.y + b.y),
+            );
+        }
+        n
+    }
+
+    /// The mean of face `f`'s perimeter vertices (each use counted once).
+    pub fn face_center(&self, f: FaceId) -> DVec3 {
+        let (mut sum, mut k) = (DVec3::ZERO, 0usize);
+        for v in self.face_vertices(f) {
+            sum += self.position(v);
+            k += 1;
+        }
+        if k == 0 {
+            DVec3::ZERO
+        } else {
+            sum / k as f64
+        }
+    }
+
+    /// The plane of face `f` (Newell normal through the perimeter's mean point), or
+    /// `None` for a face of zero area.
+    pub fn face_plane(&self, f: FaceId) -> Option<Plane> {
+        let n = self.newell(f);
+        let len = n.length();
+        if len <= f64::MIN_POSITIVE || !len.is_finite() {
+            return None;
+        }
+        let normal = n / len;
+        Some(Plane {
+            normal,
+            offset: normal.dot(self.face_center(f)),
+        })
+    }
+
+    /// Area of face `f` (of its projection on its own plane).
+    pub fn face_area(&self, f: FaceId) -> f64 {
+        self.newell(f).length() * 0.5
+    }
+
+    /// Total area of the body's faces.
+    pub fn surface_area(&self) -> f64 {
+        self.faces().map(|f| self.face_area(f)).sum()
+    }
+
+    /// Length of edge `e`.
+    pub fn edge_length(&self, e: EdgeId) -> f64 {
+        let r = self.edge(e);
+        self.position(r.vt[0]).distance(self.position(r.vt[1]))
+    }
+
+    /// Signed volume enclosed by the surface (divergence theorem over each face's fan of
+    /// triangles). Positive for a closed body whose faces run counter-clockwise seen
+    /// from outside; negative after EVERT; meaningless for an open body.
+    pub fn volume(&self) -> f64 {
+        self.volume_and_moment().0
+    }
+
+    /// The centroid of the enclosed volume, or `None` when the volume is zero.
+    pub fn centroid(&self) -> Option<DVec3> {
+        let (vol, moment) = self.volume_and_moment();
+        (vol.abs() > f64::MIN_POSITIVE).then(|| moment / vol)
+    }
+
+    /// (volume, first moment): sums over tetrahedra from the origin to each triangle of
+    /// each face's fan.
+    fn volume_and_moment(&self) -> (f64, DVec3) {
+        let mut vol = 0.0;
+        let mut moment = DVec3::ZERO;
+        for f in self.faces() {
+            let mut it = self.face_vertices(f).map(|v| self.position(v));
+            let Some(a) = it.next() else { continue };
+            let Some(mut b) = it.next() else { continue };
+            for c in it {
+                let v6 = a.dot(b.cross(c));
+                vol += v6;
+                moment += v6 * (a + b + c);
+                b = c;
+            }
+        }
+        (vol / 6.0, moment / 24.0)
+    }
+
+    /// The axis-aligned bounds of the body's vertices, or `None` when it has none.
+    pub fn bounds(&self) -> Option<Bounds> {
+        let mut it = self.vertices().map(|v| self.position(v));
+        let first = it.next()?;
+        let (min, max) = it.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        Some(Bounds { min, max })
+    }
+
+    /// Whether the body is convex: at every edge, each face's plane has the whole of
+    /// the neighbouring face on or below it (within `tol` meters). For a closed body
+    /// without handles, local convexity at every edge means convexity.
+    pub fn is_convex(&self, tol: f64) -> bool {
+        if self.handles() > 0 {
+            return false;
+        }
+        self.edges().all(|e| {
+            let r = self.edge(e);
+            let [fa, fb] = r.face;
+            if fa == fb {
+                return false;
+            }
+            match (self.face_plane(fa), self.face_plane(fb)) {
+                (Some(pa), Some(pb)) => {
+                    self.face_vertices(fb).all(|v| pa.distance(self.position(v)) <= tol)
+                        && self.face_vertices(fa).all(|v| pb.distance(self.position(v)) <= tol)
+                }
+                _ => false,
+            }
+        })
+    }
+}

@@ -1,0 +1,22 @@
+//! The geometric kernel: Baumgart's winged-edge polyhedra.
+//!
+//! Pure, synchronous Rust with no I/O. A [`Body`] holds one polyhedron's faces, edges
+//! and vertices in compact arenas; the Euler operators ([`euler`]) change its topology
+//! while keeping F − E + V = 2(B − H); the validator ([`check`]) verifies every
+//! invariant; [`geometry`] derives planes, areas and volumes from the vertex loci.
+
+mod arena;
+pub mod body;
+pub mod check;
+pub mod euler;
+pub mod geometry;
+pub mod ids;
+pub mod solids;
+pub mod topology;
+
+pub use body::{Body, Edge, Face, Vertex};
+pub use check::{Report, Violation, check_solid, check_topology};
+pub use euler::EulerError;
+pub use geometry::{Bounds, Plane};
+pub use ids::{EdgeId, FaceId, Serial, Serials, Side, VertexId};
+pub use topology::{Around, EdgeUse, Link};
