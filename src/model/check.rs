@@ -499,3 +499,175 @@ fn check_geometry(b: &Body, tol: f64, out: &mut Vec<Violation>) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! Each rule, broken on purpose.
+
+    use glam::DVec3;
+
+    use super::*;
+    use crate::model::ids::Serials;
+    use crate::model::solids::mkcube;
+
+    fn cube() -> Body {
+        mkcube(&mut Serials::new(), 2.0, 2.0, 2.0).unwrap()
+    }
+
+    #[test]
+    fn a_cube_is_valid_at_every_level() {
+        let b = cube();
+        assert!(check_solid(&b, 1e-12).is_ok());
+    }
+
+    #[test]
+    fn a_dead_face_ped_is_reported() {
+        let mut b = cube();
+        let f = b.faces().next().unwrap();
+        b.face_mut(f).ped = EdgeId::from_index(999);
+        let r = check_topology(&b);
+        assert!(matches!(r.violations[..], [Violation::FacePed { face, .. }] if face == f));
+    }
+
+    #[test]
+    fn a_vertex_ped_off_the_vertex_is_reported() {
+        let mut b = cube();
+        let v = b.vertices().next().unwrap();
+        let e = b.edges().find(|&e| !b.edge(e).vt.contains(&v)).unwrap();
+        b.vertex_mut(v).ped = e;
+        let r = check_topology(&b);
+        assert!(matches!(r.violations[..], [Violation::VertexPed { vertex, .. }] if vertex == v));
+    }
+
+    #[test]
+    fn a_loop_edge_and_a_dead_link_are_both_reported() {
+        let mut b = cube();
+        let es: Vec<EdgeId> = b.edges().collect();
+        let (e1, e2) = (es[0], es[1]);
+        let v = b.edge(e1).vt[0];
+        b.edge_mut(e1).vt[1] = v;
+        b.edge_mut(e2).cw[0] = EdgeId::NONE;
+        let r = check_topology(&b);
+        assert!(r.violations.contains(&Violation::LoopEdge { edge: e1, vertex: v }));
+        assert!(r.violations.contains(&Violation::DeadLink { edge: e2, field: "NCW" }));
+    }
+
+    #[test]
+    fn a_wing_that_does_not_point_back_is_reported() {
+        let mut b = cube();
+        let e = b.edges().next().unwrap();
+        // Point PCCW at the edge's own PCW: it meets the edge at PVT, not at NVT.
+        let wrong = b.edge(e).cw[1];
+        b.edge_mut(e).ccw[1] = wrong;
+        let r = check_topology(&b);
+        assert!(
+            r.violations
+                .iter()
+                .any(|v| matches!(v, Violation::Wing { edge, side: Side::P, .. } if *edge == e)),
+            "{r}"
+        );
+    }
+
+    #[test]
+    fn a_wrong_face_on_an_edge_is_reported() {
+        let mut b = cube();
+        let e = b.edges().next().unwrap();
+        let other = b.faces().find(|f| !b.edge(e).face.contains(f)).unwrap();
+        b.edge_mut(e).face[0] = other;
+        let r = check_topology(&b);
+        assert!(!r.is_ok());
+        assert!(
+            r.violations
+                .iter()
+                .any(|v| matches!(v, Violation::Wing { what, .. } if what.contains("another face")))
+        );
+    }
+
+    #[test]
+    fn a_wrong_handle_count_breaks_euler() {
+        let mut b = cube();
+        b.handles = 1;
+        let r = check_topology(&b);
+        assert_eq!(
+            r.violations,
+            vec![Violation::Euler {
+                chi: 2,
+                components: 1,
+                handles: 1,
+                expected: 0
+            }]
+        );
+    }
+
+    #[test]
+    fn two_bodies_in_one_arena_count_as_two_components() {
+        let mut a = cube();
+        let b = cube();
+        a.absorb(b);
+        // F−E+V = 4 = 2(B−H) with B = 2: consistent until a handle is claimed.
+        assert!(check_topology(&a).is_ok());
+        a.handles = 1;
+        let r = check_topology(&a);
+        assert!(r.violations.iter().any(|v| matches!(v, Violation::Euler { components: 2, .. })));
+    }
+
+    #[test]
+    fn a_bent_face_is_not_planar() {
+        let mut b = cube();
+        let v = b.vertices().next().unwrap();
+        let p = b.position(v);
+        b.set_position(v, p * 1.1);
+        let r = check_solid(&b, 1e-9);
+        assert!(check_topology(&b).is_ok());
+        assert_eq!(
+            r.violations.iter().filter(|v| matches!(v, Violation::NonPlanar { .. })).count(),
+            3,
+            "the three faces at the moved corner: {r}"
+        );
+    }
+
+    #[test]
+    fn an_everted_cube_faces_inward() {
+        let mut b = cube();
+        b.evert();
+        assert!(check_topology(&b).is_ok());
+        let r = check_solid(&b, 1e-9);
+        assert!(matches!(r.violations[..], [Violation::Inward { volume }] if (volume + 8.0).abs() < 1e-9));
+    }
+
+    #[test]
+    fn a_lamina_is_valid_topology_but_not_a_closed_solid() {
+        let mut s = Serials::new();
+        let (mut b, f, v1) = Body::seminal(&mut s, DVec3::ZERO);
+        let (_, v2) = b.mkev(&mut s, f, v1, DVec3::X).unwrap();
+        let (_, v3) = b.mkev(&mut s, f, v2, DVec3::new(1.0, 1.0, 0.0)).unwrap();
+        b.mkfe(&mut s, v1, f, v3).unwrap();
+        assert!(check_topology(&b).is_ok());
+        let r = check_solid(&b, 1e-9);
+        assert!(!r.is_ok());
+        // A lamina encloses nothing: zero volume.
+        assert!(r.violations.iter().any(|v| matches!(v, Violation::Inward { .. })));
+    }
+
+    #[test]
+    fn a_spur_is_not_closed_and_a_collapsed_edge_has_zero_length() {
+        let mut s = Serials::new();
+        let mut b = cube();
+        let f = b.faces().next().unwrap();
+        let v = b.face_vertices(f).next().unwrap();
+        let p = b.position(v);
+        let (spur, _) = b.mkev(&mut s, f, v, p).unwrap();
+        let r = check_solid(&b, 1e-9);
+        assert!(r.violations.contains(&Violation::NotClosed { edge: spur, face: f }));
+        assert!(r.violations.contains(&Violation::ZeroLengthEdge { edge: spur }));
+    }
+
+    #[test]
+    fn the_report_reads_as_text() {
+        let mut b = cube();
+        b.handles = 3;
+        let text = check_topology(&b).to_string();
+        assert!(text.contains("F−E+V = 2"), "{text}");
+        assert_eq!(check_topology(&cube()).to_string(), "valid");
+    }
+}
