@@ -4,3 +4,8 @@
 //! as a library on its own.
 
 pub mod model;
+
+/// The README's examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -56,7 +56,11 @@ fn mktetra_is_4_6_4_with_the_regular_volume() {
     assert_solid(&b);
     let a = r * (8.0f64 / 3.0).sqrt(); // edge of a regular tetrahedron of circumradius r
     let expected = a.powi(3) / (6.0 * 2.0f64.sqrt());
-    assert!((b.volume() - expected).abs() < 1e-9, "{} vs {expected}", b.volume());
+    assert!(
+        (b.volume() - expected).abs() < 1e-9,
+        "{} vs {expected}",
+        b.volume()
+    );
     for e in b.edges() {
         assert!((b.edge_length(e) - a).abs() < 1e-9);
     }

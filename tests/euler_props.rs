@@ -12,15 +12,37 @@ use winged::model::{Body, EdgeId, FaceId, Serials, VertexId};
 
 #[derive(Clone, Debug)]
 enum Op {
-    MkEv { f: usize, v: usize, d: [i8; 3] },
-    MkFe { f: usize, a: usize, b: usize },
-    ESplit { e: usize, t: u8 },
-    KlFe { e: usize },
-    KlEv { v: usize },
-    KlVe { e: usize },
-    Invert { e: usize },
+    MkEv {
+        f: usize,
+        v: usize,
+        d: [i8; 3],
+    },
+    MkFe {
+        f: usize,
+        a: usize,
+        b: usize,
+    },
+    ESplit {
+        e: usize,
+        t: u8,
+    },
+    KlFe {
+        e: usize,
+    },
+    KlEv {
+        v: usize,
+    },
+    KlVe {
+        e: usize,
+    },
+    Invert {
+        e: usize,
+    },
     /// An operator on raw slot ids that may be dead or out of range.
-    Junk { kind: u8, raw: u32 },
+    Junk {
+        kind: u8,
+        raw: u32,
+    },
 }
 
 fn op() -> impl Strategy<Value = Op> {
@@ -184,12 +206,16 @@ fn apply(b: &mut Body, s: &mut Serials, op: &Op) {
             );
             let refused = match kind {
                 0 => b.mkev(s, f, v, DVec3::ZERO).is_err(),
-                1 => b.mkfe(s, v, f, VertexId::from_index(raw as usize + 1)).is_err(),
+                1 => b
+                    .mkfe(s, v, f, VertexId::from_index(raw as usize + 1))
+                    .is_err(),
                 2 => b.esplit(s, e, DVec3::ZERO).is_err(),
                 3 => b.klfe(e).is_err(),
                 4 => b.klev(v).is_err(),
                 5 => b.klve(e).is_err(),
-                _ => b.glue(f, v, FaceId::from_index(raw as usize + 1), v).is_err(),
+                _ => b
+                    .glue(f, v, FaceId::from_index(raw as usize + 1), v)
+                    .is_err(),
             };
             if !refused {
                 assert_valid(b);
@@ -199,7 +225,11 @@ fn apply(b: &mut Body, s: &mut Serials, op: &Op) {
         }
     };
     if refused {
-        assert_eq!(dump(b), before, "a refused operator leaves the body as it was");
+        assert_eq!(
+            dump(b),
+            before,
+            "a refused operator leaves the body as it was"
+        );
         *b = before_body;
     }
 }

@@ -548,8 +548,14 @@ mod tests {
         b.edge_mut(e1).vt[1] = v;
         b.edge_mut(e2).cw[0] = EdgeId::NONE;
         let r = check_topology(&b);
-        assert!(r.violations.contains(&Violation::LoopEdge { edge: e1, vertex: v }));
-        assert!(r.violations.contains(&Violation::DeadLink { edge: e2, field: "NCW" }));
+        assert!(r.violations.contains(&Violation::LoopEdge {
+            edge: e1,
+            vertex: v
+        }));
+        assert!(r.violations.contains(&Violation::DeadLink {
+            edge: e2,
+            field: "NCW"
+        }));
     }
 
     #[test]
@@ -577,9 +583,9 @@ mod tests {
         let r = check_topology(&b);
         assert!(!r.is_ok());
         assert!(
-            r.violations
-                .iter()
-                .any(|v| matches!(v, Violation::Wing { what, .. } if what.contains("another face")))
+            r.violations.iter().any(
+                |v| matches!(v, Violation::Wing { what, .. } if what.contains("another face"))
+            )
         );
     }
 
@@ -608,7 +614,11 @@ mod tests {
         assert!(check_topology(&a).is_ok());
         a.handles = 1;
         let r = check_topology(&a);
-        assert!(r.violations.iter().any(|v| matches!(v, Violation::Euler { components: 2, .. })));
+        assert!(
+            r.violations
+                .iter()
+                .any(|v| matches!(v, Violation::Euler { components: 2, .. }))
+        );
     }
 
     #[test]
@@ -620,7 +630,10 @@ mod tests {
         let r = check_solid(&b, 1e-9);
         assert!(check_topology(&b).is_ok());
         assert_eq!(
-            r.violations.iter().filter(|v| matches!(v, Violation::NonPlanar { .. })).count(),
+            r.violations
+                .iter()
+                .filter(|v| matches!(v, Violation::NonPlanar { .. }))
+                .count(),
             3,
             "the three faces at the moved corner: {r}"
         );
@@ -632,7 +645,9 @@ mod tests {
         b.evert();
         assert!(check_topology(&b).is_ok());
         let r = check_solid(&b, 1e-9);
-        assert!(matches!(r.violations[..], [Violation::Inward { volume }] if (volume + 8.0).abs() < 1e-9));
+        assert!(
+            matches!(r.violations[..], [Violation::Inward { volume }] if (volume + 8.0).abs() < 1e-9)
+        );
     }
 
     #[test]
@@ -646,7 +661,11 @@ mod tests {
         let r = check_solid(&b, 1e-9);
         assert!(!r.is_ok());
         // A lamina encloses nothing: zero volume.
-        assert!(r.violations.iter().any(|v| matches!(v, Violation::Inward { .. })));
+        assert!(
+            r.violations
+                .iter()
+                .any(|v| matches!(v, Violation::Inward { .. }))
+        );
     }
 
     #[test]
@@ -658,8 +677,14 @@ mod tests {
         let p = b.position(v);
         let (spur, _) = b.mkev(&mut s, f, v, p).unwrap();
         let r = check_solid(&b, 1e-9);
-        assert!(r.violations.contains(&Violation::NotClosed { edge: spur, face: f }));
-        assert!(r.violations.contains(&Violation::ZeroLengthEdge { edge: spur }));
+        assert!(r.violations.contains(&Violation::NotClosed {
+            edge: spur,
+            face: f
+        }));
+        assert!(
+            r.violations
+                .contains(&Violation::ZeroLengthEdge { edge: spur })
+        );
     }
 
     #[test]

@@ -81,11 +81,7 @@ impl Body {
             sum += self.position(v);
             k += 1;
         }
-        if k == 0 {
-            DVec3::ZERO
-        } else {
-            sum / k as f64
-        }
+        if k == 0 { DVec3::ZERO } else { sum / k as f64 }
     }
 
     /// The plane of face `f` (Newell normal through the perimeter's mean point), or
@@ -174,8 +170,11 @@ impl Body {
             }
             match (self.face_plane(fa), self.face_plane(fb)) {
                 (Some(pa), Some(pb)) => {
-                    self.face_vertices(fb).all(|v| pa.distance(self.position(v)) <= tol)
-                        && self.face_vertices(fa).all(|v| pb.distance(self.position(v)) <= tol)
+                    self.face_vertices(fb)
+                        .all(|v| pa.distance(self.position(v)) <= tol)
+                        && self
+                            .face_vertices(fa)
+                            .all(|v| pb.distance(self.position(v)) <= tol)
                 }
                 _ => false,
             }

@@ -75,7 +75,10 @@ pub fn canon(b: &Body) -> Canon {
     let mut cycles: Vec<Vec<u64>> = b
         .faces()
         .map(|f| {
-            let c: Vec<u64> = b.face_vertices(f).map(|v| b.vertex_serial(v).get()).collect();
+            let c: Vec<u64> = b
+                .face_vertices(f)
+                .map(|v| b.vertex_serial(v).get())
+                .collect();
             least_rotation(c)
         })
         .collect();
@@ -105,9 +108,7 @@ pub fn canon_by_locus(b: &Body) -> Vec<Vec<[i64; 3]>> {
     };
     let mut cycles: Vec<Vec<[i64; 3]>> = b
         .faces()
-        .map(|f| {
-            least_rotation(b.face_vertices(f).map(key).collect())
-        })
+        .map(|f| least_rotation(b.face_vertices(f).map(key).collect()))
         .collect();
     cycles.sort();
     cycles

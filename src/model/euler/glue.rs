@@ -23,7 +23,11 @@ impl Absorbed {
     }
     /// The new id of the absorbed body's edge `e`.
     pub fn edge(&self, e: EdgeId) -> EdgeId {
-        if e.is_none() { e } else { self.edges[e.index()] }
+        if e.is_none() {
+            e
+        } else {
+            self.edges[e.index()]
+        }
     }
     /// The new id of the absorbed body's vertex `v`.
     pub fn vertex(&self, v: VertexId) -> VertexId {
@@ -148,7 +152,10 @@ impl Body {
         let n = xs.len();
         for (i, &x) in xs.iter().enumerate() {
             let y = ys[(n - i) % n];
-            if let Some(e) = self.vertex_edges(x).find(|&e| self.other_vertex(e, x) == Some(y)) {
+            if let Some(e) = self
+                .vertex_edges(x)
+                .find(|&e| self.other_vertex(e, x) == Some(y))
+            {
                 return Err(EulerError::WouldMakeLoop {
                     a: self.vertex_serial(x),
                     b: self.vertex_serial(y),
@@ -220,8 +227,11 @@ impl Body {
         // same way between the partners of x_i and x_i+1.
         let survivors: Vec<EdgeUse> = a.to_vec();
         let doomed: Vec<EdgeUse> = (0..n).map(|i| b[n - 1 - i].twin()).collect();
-        let killed: HashMap<EdgeId, usize> =
-            doomed.iter().enumerate().map(|(i, u)| (u.edge, i)).collect();
+        let killed: HashMap<EdgeId, usize> = doomed
+            .iter()
+            .enumerate()
+            .map(|(i, u)| (u.edge, i))
+            .collect();
         let map = |u: EdgeUse| -> EdgeUse {
             match killed.get(&u.edge) {
                 Some(&i) if doomed[i] == u => survivors[i],
@@ -449,7 +459,10 @@ impl Body {
                 n2,
             });
         }
-        if let Some(shared) = self.face_vertices(f1).find(|&x| self.face_vertices(f2).any(|y| y == x)) {
+        if let Some(shared) = self
+            .face_vertices(f1)
+            .find(|&x| self.face_vertices(f2).any(|y| y == x))
+        {
             return Err(EulerError::FacesTouch {
                 face1: self.face_serial(f1),
                 face2: self.face_serial(f2),

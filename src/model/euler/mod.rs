@@ -99,7 +99,9 @@ pub enum EulerError {
         valence: usize,
     },
     /// The operation would make an edge whose two ends are the same vertex.
-    #[error("vertices {a} and {b} are already joined by edge {edge}; merging them would make a loop")]
+    #[error(
+        "vertices {a} and {b} are already joined by edge {edge}; merging them would make a loop"
+    )]
     WouldMakeLoop {
         /// One vertex.
         a: Serial,

@@ -33,7 +33,11 @@ impl Body {
     /// seam edge has two different faces.
     ///
     /// Inverse: [`Body::glue`] (or [`Body::glue_bodies`]) of the two new faces.
-    pub fn unglue(&mut self, serials: &mut Serials, seam: &[EdgeId]) -> Result<Unglued, EulerError> {
+    pub fn unglue(
+        &mut self,
+        serials: &mut Serials,
+        seam: &[EdgeId],
+    ) -> Result<Unglued, EulerError> {
         let loop_uses = self.plan_unglue(seam)?;
         let n = loop_uses.len();
         let xs: Vec<VertexId> = loop_uses.iter().map(|&u| self.origin(u)).collect();
@@ -98,8 +102,7 @@ impl Body {
                 self.face_mut(g).ped = cs2[i];
             }
         }
-        for i in 0..n {
-            let t = twins[i];
+        for t in &twins {
             self.edge_mut(t.edge).face[t.side.ix()] = kept_face;
         }
         for i in 0..n {
@@ -158,7 +161,9 @@ impl Body {
             }
         }
         if at.values().any(|l| l.len() != 2) {
-            return Err(bad("a vertex of the seam is on more or fewer than two seam edges"));
+            return Err(bad(
+                "a vertex of the seam is on more or fewer than two seam edges",
+            ));
         }
         let first = EdgeUse::new(seam[0], Side::P);
         let mut uses = vec![first];
@@ -249,7 +254,10 @@ impl Body {
             .iter()
             .map(|&v| {
                 let s = self.vertex_serial(v);
-                (v, VertexId(part.vertices.insert_unsorted(*self.vertex(v), s)))
+                (
+                    v,
+                    VertexId(part.vertices.insert_unsorted(*self.vertex(v), s)),
+                )
             })
             .collect();
         for &nf in fmap.values() {

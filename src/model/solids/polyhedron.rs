@@ -78,7 +78,9 @@ pub enum BuildError {
         b: u32,
     },
     /// The faces around a vertex do not form a single fan.
-    #[error("the faces around vertex {vertex} form more than one fan: the surface is not a manifold there")]
+    #[error(
+        "the faces around vertex {vertex} form more than one fan: the surface is not a manifold there"
+    )]
     NonManifoldVertex {
         /// The vertex index.
         vertex: u32,
@@ -96,7 +98,9 @@ pub enum BuildError {
         pieces: usize,
     },
     /// Every face is clockwise seen from outside.
-    #[error("the surface faces inward (volume {volume}): list each face's vertices counter-clockwise seen from outside")]
+    #[error(
+        "the surface faces inward (volume {volume}): list each face's vertices counter-clockwise seen from outside"
+    )]
     Inward {
         /// The signed volume.
         volume: f64,
@@ -177,7 +181,10 @@ impl Plan {
             if f.len() <= 8 {
                 for (k, &i) in f.iter().enumerate() {
                     if f[k + 1..].contains(&i) {
-                        return Err(BuildError::RepeatedVertex { face: fi, vertex: i });
+                        return Err(BuildError::RepeatedVertex {
+                            face: fi,
+                            vertex: i,
+                        });
                     }
                 }
             } else {
@@ -192,7 +199,9 @@ impl Plan {
             }
             total += f.len();
             if total >= u32::MAX as usize / 2 {
-                return Err(BuildError::TooLarge { what: "face corners" });
+                return Err(BuildError::TooLarge {
+                    what: "face corners",
+                });
             }
         }
         face_start.push(total as u32);
@@ -309,7 +318,9 @@ impl Plan {
                 parent[x as usize] = y;
             }
         }
-        let pieces = (0..nv as u32).filter(|&i| root(&mut parent, i) == i).count();
+        let pieces = (0..nv as u32)
+            .filter(|&i| root(&mut parent, i) == i)
+            .count();
         if pieces != 1 {
             return Err(BuildError::Disconnected { pieces });
         }
@@ -337,7 +348,12 @@ impl Plan {
         })
     }
 
-    fn build<F: AsRef<[u32]>>(self, serials: &mut Serials, positions: &[DVec3], faces: &[F]) -> Body {
+    fn build<F: AsRef<[u32]>>(
+        self,
+        serials: &mut Serials,
+        positions: &[DVec3],
+        faces: &[F],
+    ) -> Body {
         let nh = self.twin.len();
         let mut b = Body::empty();
         b.reserve(faces.len(), nh / 2, positions.len());
@@ -345,7 +361,9 @@ impl Plan {
             .iter()
             .map(|&p| b.mkv(serials, p, EdgeId::NONE))
             .collect();
-        let fids: Vec<FaceId> = (0..faces.len()).map(|_| b.mkf(serials, EdgeId::NONE)).collect();
+        let fids: Vec<FaceId> = (0..faces.len())
+            .map(|_| b.mkf(serials, EdgeId::NONE))
+            .collect();
         // The use each half-edge becomes: the lower-numbered half of a pair is the P use.
         let mut use_of = vec![EdgeUse::new(EdgeId::NONE, Side::P); nh];
         for (fi, f) in faces.iter().enumerate() {
