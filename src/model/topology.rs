@@ -411,3 +411,59 @@ impl Iterator for VertexUses<'_> {
         Some(u)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::check::check_topology;
+    use crate::model::ids::Serials;
+    use crate::model::solids::mkcube;
+
+    #[test]
+    fn wing_relinks_a_broken_wing_pair() {
+        let mut b = mkcube(&mut Serials::new(), 2.0, 2.0, 2.0).unwrap();
+        let e = b.edges().next().unwrap();
+        let w = b.edge(e).pccw();
+        let good = b.clone();
+        // Break the link both ways: E's PCCW and W's clockwise wing back to E.
+        let far = b.edges().find(|&x| x != e && x != w).unwrap();
+        b.edge_mut(e).ccw[1] = far;
+        // W's use that follows E's P use starts at NVT(E).
+        let ws = b.side_at(w, b.edge(e).nvt());
+        b.edge_mut(w).cw[ws.ix()] = far;
+        assert!(!check_topology(&b).is_ok());
+        b.wing(e, w);
+        assert!(check_topology(&b).is_ok());
+        for x in b.edges() {
+            assert_eq!(b.edge(x), good.edge(x));
+        }
+    }
+
+    #[test]
+    fn invert_keeps_every_perimeter_and_is_its_own_inverse() {
+        let mut b = mkcube(&mut Serials::new(), 2.0, 2.0, 2.0).unwrap();
+        let e = b.edges().next().unwrap();
+        let r = *b.edge(e);
+        let cycles: Vec<Vec<VertexId>> = b.faces().map(|f| b.face_vertices(f).collect()).collect();
+        b.invert(e);
+        let s = *b.edge(e);
+        assert_eq!(
+            (s.pvt(), s.nvt(), s.pface(), s.nface()),
+            (r.nvt(), r.pvt(), r.nface(), r.pface())
+        );
+        assert_eq!(
+            (s.pcw(), s.ncw(), s.pccw(), s.nccw()),
+            (r.ncw(), r.pcw(), r.nccw(), r.pccw())
+        );
+        assert!(check_topology(&b).is_ok());
+        for (f, c) in b.faces().zip(&cycles) {
+            let now: Vec<VertexId> = b.face_vertices(f).collect();
+            let k = now.iter().position(|v| *v == c[0]).unwrap();
+            let mut now = now;
+            now.rotate_left(k);
+            assert_eq!(&now, c);
+        }
+        b.invert(e);
+        assert_eq!(*b.edge(e), r);
+    }
+}
