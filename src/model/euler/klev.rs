@@ -69,6 +69,28 @@ impl Body {
         }
     }
 
+    /// Moves every edge at `gone` except `except` over to `keep` (sets its vertex there).
+    /// Returns the first edge moved. Walks the fan without allocating: each step finds
+    /// the next edge before changing the current one.
+    fn move_fan(&mut self, gone: VertexId, keep: VertexId, except: EdgeId) -> Option<EdgeId> {
+        let start = self.vertex_first_use(gone)?;
+        let mut first = None;
+        let mut u = start;
+        loop {
+            let next = self.ccw_about_origin(u);
+            if u.edge != except {
+                first.get_or_insert(u.edge);
+                self.edge_mut(u.edge).vt[u.side.ix()] = keep;
+            }
+            // No loops: the fan is back at its start when it meets the start's edge.
+            if next.edge == start.edge {
+                break;
+            }
+            u = next;
+        }
+        first
+    }
+
     /// Contracts edge `e` into its PVT: NVT and `e` die, NVT's other edges move to PVT.
     ///
     /// Precondition: checked by the callers (no other edge joins the two ends).
@@ -88,10 +110,7 @@ impl Body {
             return;
         }
         // Move the other edges at `gone` over to `keep` (walk before relinking).
-        let moved: Vec<EdgeUse> = self.vertex_uses(gone).filter(|u| u.edge != e).collect();
-        for u in &moved {
-            self.edge_mut(u.edge).vt[u.side.ix()] = keep;
-        }
+        let first_moved = self.move_fan(gone, keep, e);
         if np == en {
             // `gone` was a spur tip.
             self.set_next(pp, nn);
@@ -108,7 +127,7 @@ impl Body {
         self.repoint_peds(e, alive_n, &[r.face[0]], &[]);
         // Prefer an edge that came over from `gone`, so that KLEV after ESPLIT gives the
         // surviving vertex back its old PED.
-        let keep_ped = moved.first().map_or(alive_n, |u| u.edge);
+        let keep_ped = first_moved.unwrap_or(alive_n);
         self.repoint_peds(e, keep_ped, &[], &[keep]);
         self.klv(gone);
         self.kle(e);
