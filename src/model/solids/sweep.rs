@@ -16,6 +16,9 @@
 //! | [`Body::prism`] | + n | + 2n | + n |
 //! | [`Body::prismoid`] | + 2n | + 3n | + n |
 //!
+//! The sweeps check the topology of the face and the direction of the sweep; they do not
+//! check whether the new part runs into the rest of the body.
+//!
 //! Every sweep checks its whole input before the first Euler operator, so a refused sweep
 //! returns a [`SolidError`], takes no serial number and leaves the body as it was. Its
 //! inverse is a run of KLFEs, newest edge first, then KLEVs of the new vertices.
@@ -311,14 +314,25 @@ impl Body {
 /// overlapping segments, non-zero area).
 pub fn lamina(serials: &mut Serials, polygon: &[DVec2], z: f64) -> Result<Lamina, SolidError> {
     finite("z", z)?;
+    let ccw = counter_clockwise(polygon)?;
+    Ok(build_lamina(serials, &ccw, z)?)
+}
+
+/// The polygon's points counter-clockwise, after checking that it is simple.
+fn counter_clockwise(polygon: &[DVec2]) -> Result<Vec<DVec2>, SolidError> {
     let twice_area = simple_polygon(polygon, MAX_POLYGON_POINTS).map_err(SolidError::Polygon)?;
     let mut pts = polygon.to_vec();
     if twice_area < 0.0 {
         pts.reverse();
     }
-    let (mut body, bottom, first) = Body::seminal(serials, pts[0].extend(z));
+    Ok(pts)
+}
+
+/// The lamina of a checked, counter-clockwise polygon.
+fn build_lamina(serials: &mut Serials, ccw: &[DVec2], z: f64) -> Result<Lamina, EulerError> {
+    let (mut body, bottom, first) = Body::seminal(serials, ccw[0].extend(z));
     let mut last = first;
-    for p in &pts[1..] {
+    for p in &ccw[1..] {
         last = body.mkev(serials, bottom, last, p.extend(z))?.1;
     }
     // The new face faces the side from which the wire runs counter-clockwise: up.
@@ -337,8 +351,8 @@ pub fn prism_solid(
     height: f64,
 ) -> Result<Body, SolidError> {
     positive("height", height)?;
-    simple_polygon(polygon, MAX_POLYGON_POINTS).map_err(SolidError::Polygon)?;
-    let mut l = lamina(serials, polygon, -height / 2.0)?;
+    let ccw = counter_clockwise(polygon)?;
+    let mut l = build_lamina(serials, &ccw, -height / 2.0)?;
     l.body.prism(serials, l.top, DVec3::Z * height, 1.0)?;
     Ok(l.body)
 }
@@ -356,19 +370,15 @@ pub fn pyramid_solid(
     height: f64,
 ) -> Result<Body, SolidError> {
     positive("height", height)?;
-    let twice_area = simple_polygon(polygon, MAX_POLYGON_POINTS).map_err(SolidError::Polygon)?;
-    let sign = twice_area.signum();
-    let c = area_centroid(polygon);
-    let n = polygon.len();
-    for i in 0..n {
-        let (a, b) = (polygon[i] - c, polygon[(i + 1) % n] - c);
-        if sign * a.perp_dot(b) <= 0.0 {
-            return Err(SolidError::Polygon(PolygonFault::NotStarShaped {
-                index: i,
-            }));
-        }
+    let ccw = counter_clockwise(polygon)?;
+    let c = area_centroid(&ccw);
+    // Segment i of the input must turn about the centroid the way the whole polygon does.
+    let (p, n) = (polygon, polygon.len());
+    let sign = if ccw[0] == p[0] { 1.0 } else { -1.0 };
+    if let Some(index) = (0..n).find(|&i| sign * (p[i] - c).perp_dot(p[(i + 1) % n] - c) <= 0.0) {
+        return Err(SolidError::Polygon(PolygonFault::NotStarShaped { index }));
     }
-    let mut l = lamina(serials, polygon, -height / 2.0)?;
+    let mut l = build_lamina(serials, &ccw, -height / 2.0)?;
     l.body.pyramid(serials, l.top, c.extend(height / 2.0))?;
     Ok(l.body)
 }
