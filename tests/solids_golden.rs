@@ -1338,3 +1338,107 @@ fn rotation_solids_refuse_bad_parameters_without_taking_serials() {
     ));
     assert_eq!(s.peek(), next);
 }
+
+// ------------------------------------------------------------------ random sweeps
+
+/// Each face as the cycle of its vertices' serials, rotated to start at the smallest,
+/// keyed by the face's serial.
+fn face_cycles(b: &Body) -> Vec<(Serial, Vec<Serial>)> {
+    let mut out: Vec<(Serial, Vec<Serial>)> = b
+        .faces()
+        .map(|f| {
+            let mut c: Vec<Serial> = b.face_vertices(f).map(|v| b.vertex_serial(v)).collect();
+            let k = (0..c.len()).min_by_key(|&i| c[i]).unwrap();
+            c.rotate_left(k);
+            (b.face_serial(f), c)
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+fn loci(b: &Body) -> Vec<(Serial, DVec3)> {
+    let mut out: Vec<_> = b
+        .vertices()
+        .map(|v| (b.vertex_serial(v), b.position(v)))
+        .collect();
+    out.sort_by_key(|x| x.0);
+    out
+}
+
+enum Made {
+    Peak(VertexId),
+    Ring(Serial, Vec<VertexId>),
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+
+    /// Random outward sweeps of random faces keep a valid solid whose volume grows, and
+    /// undoing them newest first (KLFE, then KLEV) gives the cube back.
+    #[test]
+    fn random_sweeps_are_valid_and_undo(
+        ops in proptest::collection::vec(
+            (0u8..4, 0usize..1000, 0.3f64..1.5, 0.1f64..2.0, -0.5f64..0.5),
+            1..7,
+        )
+    ) {
+        let mut s = Serials::new();
+        let mut b = mkcube(&mut s, 2.0, 2.0, 2.0).unwrap();
+        let (cycles, positions) = (face_cycles(&b), loci(&b));
+        let mut made = Vec::new();
+        for (kind, pick, scale, height, shear) in ops {
+            let faces: Vec<FaceId> = b.faces().collect();
+            let f = faces[pick % faces.len()];
+            let plane = b.face_plane(f).unwrap();
+            let tangent = plane.normal.any_orthonormal_vector();
+            let offset = plane.normal * height + tangent * shear;
+            let volume = b.volume();
+            let mark = s.peek();
+            let (df, de, dv) = {
+                let n = b.face_degree(f);
+                match kind {
+                    0 => (n, 2 * n, n),
+                    1 | 2 => (2 * n, 3 * n, n),
+                    _ => (n - 1, n, 1),
+                }
+            };
+            let before = counts(&b);
+            made.push(match kind {
+                0 => Made::Ring(mark, b.prism(&mut s, f, offset, scale).unwrap().ring),
+                1 | 2 => {
+                    let twist = if kind == 1 { Twist::Cw } else { Twist::Ccw };
+                    Made::Ring(mark, b.prismoid(&mut s, f, offset, scale, twist).unwrap().ring)
+                }
+                _ => Made::Peak(b.pyramid(&mut s, f, b.face_center(f) + offset).unwrap()),
+            });
+            proptest::prop_assert_eq!(counts(&b), (before.0 + df, before.1 + de, before.2 + dv));
+            let r = check_solid(&b, 1e-9);
+            proptest::prop_assert!(r.is_ok(), "{}", r);
+            proptest::prop_assert!(b.volume() > volume);
+        }
+        while let Some(m) = made.pop() {
+            match m {
+                Made::Peak(peak) => unpyramid(&mut b, peak),
+                Made::Ring(mark, ring) => {
+                    let mut between: Vec<EdgeId> = b
+                        .edges()
+                        .filter(|&e| b.edge_serial(e) >= mark)
+                        .filter(|&e| ring.iter().all(|&w| b.vertex(w).ped != e))
+                        .collect();
+                    between.sort_by_key(|&e| std::cmp::Reverse(b.edge_serial(e)));
+                    for e in between {
+                        b.klfe(e).unwrap();
+                    }
+                    for w in ring {
+                        b.klev(w).unwrap();
+                    }
+                }
+            }
+            let r = check_solid(&b, 1e-9);
+            proptest::prop_assert!(r.is_ok(), "{}", r);
+        }
+        proptest::prop_assert_eq!(face_cycles(&b), cycles);
+        proptest::prop_assert_eq!(loci(&b), positions);
+    }
+}
