@@ -5,7 +5,7 @@
 
 use std::process::ExitCode;
 
-use winged::model::solids::{mkcube, mktetra};
+use winged::model::solids::{cylinder, mkcube, mktetra, sphere, torus};
 use winged::model::{Body, Serials, check_solid};
 
 const USAGE: &str = "usage: winged check    build the seeds' example solids and validate them";
@@ -54,6 +54,18 @@ fn check() -> ExitCode {
     show(
         "MKTETRA",
         mktetra(&mut serials, 1.0).map_err(|e| e.to_string()),
+    );
+    show(
+        "cylinder",
+        cylinder(&mut serials, 1.0, 2.0, 32).map_err(|e| e.to_string()),
+    );
+    show(
+        "sphere",
+        sphere(&mut serials, 1.0, 32, 16).map_err(|e| e.to_string()),
+    );
+    show(
+        "torus",
+        torus(&mut serials, 2.0, 0.5, 32, 16).map_err(|e| e.to_string()),
     );
     if failed {
         ExitCode::FAILURE
