@@ -89,6 +89,12 @@ pub enum CameraError {
         /// "FOCAL", "PDX" or "PDY".
         what: &'static str,
     },
+    /// A field of view outside (0, π).
+    #[error("field of view {fov_rad} rad is not between 0 and π")]
+    BadFieldOfView {
+        /// The angle given, radians.
+        fov_rad: f64,
+    },
     /// look_at with the eye on the target: no view direction.
     #[error("look_at: the eye is at the target")]
     EyeAtTarget,
@@ -175,11 +181,10 @@ impl Intrinsics {
                 what: "field of view",
             });
         }
-        let f = height as f64 / 2.0 / (fov_y_rad / 2.0).tan();
-        if !(fov_y_rad > 0.0 && fov_y_rad < std::f64::consts::PI) {
-            return Err(CameraError::BadFocal { fx: f, fy: f });
+        if fov_y_rad <= 0.0 || fov_y_rad >= std::f64::consts::PI {
+            return Err(CameraError::BadFieldOfView { fov_rad: fov_y_rad });
         }
-        Intrinsics::centered(width, height, f)
+        Intrinsics::centered(width, height, height as f64 / 2.0 / (fov_y_rad / 2.0).tan())
     }
 
     /// Checks the conditions [`Intrinsics::new`] states.
@@ -527,7 +532,16 @@ impl Light {
                 if !direction.is_finite() {
                     return Err(LightError::NonFinite { what: "direction" });
                 }
-                let direction = direction.try_normalize().ok_or(LightError::ZeroDirection)?;
+                let length = direction.length();
+                if length == 0.0 {
+                    return Err(LightError::ZeroDirection);
+                }
+                // Leave a unit vector's bits alone, so validating twice changes nothing.
+                let direction = if (length - 1.0).abs() <= 4.0 * f64::EPSILON {
+                    direction
+                } else {
+                    direction / length
+                };
                 Ok(Light::Sun {
                     direction,
                     intensity,

@@ -78,10 +78,13 @@ impl Pose {
         if !length.is_finite() || length < MIN_QUATERNION_LENGTH {
             return Err(PoseError::ZeroRotation { length });
         }
-        Ok(Pose {
-            position,
-            rotation: rotation / length,
-        })
+        // Leave a unit quaternion's bits alone, so validating twice changes nothing.
+        let rotation = if (length - 1.0).abs() <= 4.0 * f64::EPSILON {
+            rotation
+        } else {
+            rotation / length
+        };
+        Ok(Pose { position, rotation })
     }
 
     /// A pure translation. Precondition: `position` is finite (use [`Pose::new`] for
@@ -159,8 +162,15 @@ impl Pose {
     /// Whether two poses place the frame at the same place within `position_tol` meters
     /// and `angle_tol` radians (q and −q are the same rotation).
     pub fn approx_eq(&self, other: &Pose, position_tol: f64, angle_tol: f64) -> bool {
-        self.position.distance(other.position) <= position_tol
-            && self.rotation.angle_between(other.rotation) <= angle_tol
+        self.position.distance(other.position) <= position_tol && self.angle_to(other) <= angle_tol
+    }
+
+    /// The angle (radians, 0 to π) of the rotation taking this pose's orientation to
+    /// `other`'s. Computed as `2·atan2(|v|, |w|)` of the relative quaternion, which stays
+    /// accurate for tiny angles (unlike `acos` of a dot product).
+    pub fn angle_to(&self, other: &Pose) -> f64 {
+        let d = self.rotation.conjugate() * other.rotation;
+        2.0 * d.xyz().length().atan2(d.w.abs())
     }
 }
 
