@@ -7,16 +7,26 @@
 
 mod arena;
 pub mod body;
+pub mod camera;
 pub mod check;
 pub mod euler;
 pub mod geometry;
 pub mod ids;
+pub mod parts;
+pub mod pose;
 pub mod solids;
 pub mod topology;
+pub mod transform;
+pub mod world;
 
 pub use body::{Body, Edge, Face, Vertex};
+pub use camera::{BaumgartRaster, Camera, CameraError, Intrinsics, Light, LightError};
 pub use check::{Report, Violation, check_solid, check_topology};
 pub use euler::EulerError;
 pub use geometry::{Bounds, Plane};
 pub use ids::{EdgeId, FaceId, Serial, Serials, Side, VertexId};
+pub use parts::{BodyId, BodyNode, Entity, PartsTree};
+pub use pose::{Pose, PoseError};
 pub use topology::{Around, EdgeUse, Link};
+pub use transform::{Frame, Moves, Transform, TransformError};
+pub use world::{Killed, UngluedBodies, World, WorldError};

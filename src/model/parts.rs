@@ -1,0 +1,362 @@
+//! The parts tree: Baumgart's PART/COPART/SUPART links between bodies.
+//!
+//! Every body hangs from a *supart*, the whole it is a part of; at the top is the world
+//! body, which is its own supart and has no geometry. A body's [`Pose`] places its own
+//! frame (the frame of its vertex loci) in its supart's frame, so moving a body moves
+//! everything attached below it: turn the shoulder and the whole arm follows.
+//!
+//! [`PartsTree`] holds the nodes and answers the read-only questions (SUPART, the parts
+//! list, FDNAME, world poses, subtrees). Its changes are made by [`World`](super::World),
+//! which checks every request first and keeps the tree's invariants:
+//!
+//! * the root is its own supart; every other node's supart is a live node, and the node
+//!   appears exactly once in that supart's `parts`;
+//! * following suparts from any node reaches the root (no cycles);
+//! * a name belongs to at most one node, and the name index agrees with the nodes.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::sync::Arc;
+
+use super::body::Body;
+use super::ids::{EdgeId, FaceId, Serial, VertexId};
+use super::pose::Pose;
+
+/// A body's id: its serial number, taken from the same world-wide counter as its faces,
+/// edges and vertices, so no id of any kind is ever reused.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Debug)]
+pub struct BodyId(pub Serial);
+
+impl BodyId {
+    /// The serial number.
+    #[inline]
+    pub fn serial(self) -> Serial {
+        self.0
+    }
+    /// The number itself, as the API shows it.
+    #[inline]
+    pub fn get(self) -> u64 {
+        self.0.0
+    }
+}
+
+impl fmt::Display for BodyId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+/// What a serial number names inside a body: the body itself, or one of its faces, edges
+/// or vertices (by slot id). Also the target of a transform (see
+/// [`Transform`](super::Transform)): a body is the set of vertices in its vertex ring, a
+/// face the vertices on its perimeter, an edge its two ends, a vertex itself.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub enum Entity {
+    /// The body node.
+    Body,
+    /// A face of the body.
+    Face(FaceId),
+    /// An edge of the body.
+    Edge(EdgeId),
+    /// A vertex of the body.
+    Vertex(VertexId),
+}
+
+/// One body in the parts tree.
+///
+/// The world hands these out only by shared reference; the tree's links (`supart`,
+/// `parts`, `name`) change only through [`World`](super::World)'s checked operations.
+#[derive(Clone, Debug)]
+pub struct BodyNode {
+    /// The print name FDNAME finds, unique in the world; `None` for an unnamed body.
+    pub name: Option<String>,
+    /// The whole this body is a part of (the root is its own supart).
+    pub supart: BodyId,
+    /// The sub-parts, in the order they were attached (PART, then COPART links).
+    pub parts: Vec<BodyId>,
+    /// This body's frame placed in its supart's frame.
+    pub pose: Pose,
+    /// The polyhedron, behind an `Arc` so that cloning the world (a snapshot) shares
+    /// every body, and a later write copies only the body it changes.
+    pub body: Arc<Body>,
+}
+
+/// The longest name a body, camera or light may have, in bytes.
+pub const MAX_NAME_LEN: usize = 128;
+
+/// Checks a body, camera or light name: 1 to [`MAX_NAME_LEN`] bytes of UTF-8, no control
+/// characters, no leading or trailing white space. Returns what is wrong.
+pub fn validate_name(name: &str) -> Result<(), &'static str> {
+    if name.is_empty() {
+        return Err("the name is empty");
+    }
+    if name.len() > MAX_NAME_LEN {
+        return Err("the name is longer than 128 bytes");
+    }
+    if name.chars().any(char::is_control) {
+        return Err("the name contains a control character");
+    }
+    if name.trim() != name {
+        return Err("the name begins or ends with white space");
+    }
+    Ok(())
+}
+
+/// The bodies of a world and the links between them.
+#[derive(Clone, Debug)]
+pub struct PartsTree {
+    nodes: BTreeMap<BodyId, BodyNode>,
+    names: BTreeMap<String, BodyId>,
+    root: BodyId,
+}
+
+impl PartsTree {
+    /// The name of the root body.
+    pub const ROOT_NAME: &'static str = "world";
+
+    /// A tree holding only the root body `root`, named [`Self::ROOT_NAME`], its own
+    /// supart, with the identity pose and no geometry.
+    pub(crate) fn new(root: BodyId) -> Self {
+        let mut nodes = BTreeMap::new();
+        nodes.insert(
+            root,
+            BodyNode {
+                name: Some(Self::ROOT_NAME.to_owned()),
+                supart: root,
+                parts: Vec::new(),
+                pose: Pose::IDENTITY,
+                body: Arc::new(Body::empty()),
+            },
+        );
+        let mut names = BTreeMap::new();
+        names.insert(Self::ROOT_NAME.to_owned(), root);
+        Self { nodes, names, root }
+    }
+
+    /// The world body at the top of the tree.
+    #[inline]
+    pub fn root(&self) -> BodyId {
+        self.root
+    }
+
+    /// Number of nodes, the root included.
+    #[inline]
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The node of body `b`, if it lives.
+    #[inline]
+    pub fn get(&self, b: BodyId) -> Option<&BodyNode> {
+        self.nodes.get(&b)
+    }
+
+    /// Whether `b` is a live body.
+    #[inline]
+    pub fn contains(&self, b: BodyId) -> bool {
+        self.nodes.contains_key(&b)
+    }
+
+    /// SUPART(b): the whole `b` is a part of (the root's is the root).
+    pub fn supart(&self, b: BodyId) -> Option<BodyId> {
+        self.nodes.get(&b).map(|n| n.supart)
+    }
+
+    /// The sub-parts of `b`, in attachment order.
+    pub fn parts(&self, b: BodyId) -> Option<&[BodyId]> {
+        self.nodes.get(&b).map(|n| n.parts.as_slice())
+    }
+
+    /// FDNAME: the body with this name.
+    pub fn find_by_name(&self, name: &str) -> Option<BodyId> {
+        self.names.get(name).copied()
+    }
+
+    /// Every node, the root included, in id order.
+    pub fn iter(&self) -> impl Iterator<Item = (BodyId, &BodyNode)> + '_ {
+        self.nodes.iter().map(|(&id, n)| (id, n))
+    }
+
+    /// The suparts of `b` from its own supart up to the root (empty for the root or an
+    /// unknown body).
+    pub fn ancestors(&self, b: BodyId) -> impl Iterator<Item = BodyId> + '_ {
+        let mut cur = if b == self.root { None } else { Some(b) };
+        let mut budget = self.nodes.len();
+        std::iter::from_fn(move || {
+            let s = self.nodes.get(&cur?)?.supart;
+            budget = budget.checked_sub(1)?;
+            cur = (s != self.root).then_some(s);
+            Some(s)
+        })
+    }
+
+    /// Whether `b` lies in the subtree headed by `top` (`b == top` counts).
+    pub fn is_within(&self, b: BodyId, top: BodyId) -> bool {
+        b == top || self.ancestors(b).any(|a| a == top)
+    }
+
+    /// The subtree headed by `b`, in pre-order (`b` first); empty for an unknown body.
+    pub fn subtree(&self, b: BodyId) -> Vec<BodyId> {
+        let mut out = Vec::new();
+        if !self.contains(b) {
+            return out;
+        }
+        let mut stack = vec![b];
+        while let Some(x) = stack.pop() {
+            out.push(x);
+            if let Some(n) = self.nodes.get(&x) {
+                stack.extend(n.parts.iter().rev().copied());
+            }
+        }
+        out
+    }
+
+    /// The world pose of `b`: the poses on the path from the root down to `b` composed,
+    /// so it maps `b`'s vertex loci to world coordinates. The root's is the identity.
+    pub fn world_pose(&self, b: BodyId) -> Option<Pose> {
+        let mut pose = self.nodes.get(&b)?.pose;
+        for a in self.ancestors(b) {
+            pose = self.nodes[&a].pose.compose(&pose);
+        }
+        Some(pose)
+    }
+
+    /// Checks the tree's invariants and returns every problem found (empty when sound).
+    /// The world keeps these; this is for tests and for loading saved worlds.
+    pub fn check(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let Some(root) = self.nodes.get(&self.root) else {
+            out.push(format!("root {} has no node", self.root));
+            return out;
+        };
+        if root.supart != self.root {
+            out.push("the root is not its own supart".to_owned());
+        }
+        for (&id, n) in &self.nodes {
+            if id != self.root {
+                match self.nodes.get(&n.supart) {
+                    None => out.push(format!("body {id}: supart {} is not live", n.supart)),
+                    Some(s) => {
+                        let k = s.parts.iter().filter(|&&p| p == id).count();
+                        if k != 1 {
+                            out.push(format!("body {id} appears {k} times in its supart's parts"));
+                        }
+                    }
+                }
+                if self.ancestors(id).last() != Some(self.root) {
+                    out.push(format!("body {id} does not reach the root"));
+                }
+            }
+            for &p in &n.parts {
+                if self.nodes.get(&p).map(|c| c.supart) != Some(id) {
+                    out.push(format!("body {id} lists part {p} whose supart differs"));
+                }
+            }
+            if let Some(name) = &n.name
+                && self.names.get(name) != Some(&id)
+            {
+                out.push(format!("body {id}: name {name:?} is not indexed to it"));
+            }
+            if !n.pose.is_finite() || (n.pose.rotation.length() - 1.0).abs() > 1e-9 {
+                out.push(format!("body {id}: pose is not finite and unit"));
+            }
+        }
+        for (name, id) in &self.names {
+            if self.nodes.get(id).and_then(|n| n.name.as_deref()) != Some(name.as_str()) {
+                out.push(format!(
+                    "name {name:?} indexes body {id}, which has another name"
+                ));
+            }
+        }
+        out
+    }
+
+    // ---- changes, made by the world after it has checked them ----
+
+    /// The node of `b`, mutably. Callers change only `pose` and `body` through this.
+    pub(crate) fn get_mut(&mut self, b: BodyId) -> Option<&mut BodyNode> {
+        self.nodes.get_mut(&b)
+    }
+
+    /// Adds a node under `supart`. Preconditions: `id` is new, `supart` lives, `name`
+    /// (if any) is valid and free.
+    pub(crate) fn add(
+        &mut self,
+        id: BodyId,
+        name: Option<String>,
+        supart: BodyId,
+        pose: Pose,
+        body: Arc<Body>,
+    ) {
+        debug_assert!(!self.nodes.contains_key(&id) && self.nodes.contains_key(&supart));
+        if let Some(n) = &name {
+            debug_assert!(!self.names.contains_key(n));
+            self.names.insert(n.clone(), id);
+        }
+        self.nodes
+            .get_mut(&supart)
+            .expect("supart is live")
+            .parts
+            .push(id);
+        self.nodes.insert(
+            id,
+            BodyNode {
+                name,
+                supart,
+                parts: Vec::new(),
+                pose,
+                body,
+            },
+        );
+    }
+
+    /// DET then ATT: moves `b` (with its subtree) into `supart`'s parts list, last.
+    /// Its pose is not changed. Preconditions: both live, `b` is not the root, `supart`
+    /// is not within `b`'s subtree.
+    pub(crate) fn relink(&mut self, b: BodyId, supart: BodyId) {
+        debug_assert!(b != self.root && !self.is_within(supart, b));
+        let old = self.nodes[&b].supart;
+        if let Some(o) = self.nodes.get_mut(&old) {
+            o.parts.retain(|&p| p != b);
+        }
+        self.nodes
+            .get_mut(&supart)
+            .expect("supart is live")
+            .parts
+            .push(b);
+        self.nodes.get_mut(&b).expect("b is live").supart = supart;
+    }
+
+    /// Gives `b` a new name (or none). Preconditions: `b` lives; `name` is valid and free
+    /// or already `b`'s.
+    pub(crate) fn set_name(&mut self, b: BodyId, name: Option<String>) {
+        let node = self.nodes.get_mut(&b).expect("b is live");
+        if let Some(old) = node.name.take() {
+            self.names.remove(&old);
+        }
+        if let Some(n) = &name {
+            self.names.insert(n.clone(), b);
+        }
+        node.name = name;
+    }
+
+    /// Removes `b` and its whole subtree, returning the removed nodes in pre-order.
+    /// Precondition: `b` lives and is not the root.
+    pub(crate) fn remove_subtree(&mut self, b: BodyId) -> Vec<(BodyId, BodyNode)> {
+        debug_assert!(b != self.root);
+        let ids = self.subtree(b);
+        let supart = self.nodes[&b].supart;
+        if let Some(s) = self.nodes.get_mut(&supart) {
+            s.parts.retain(|&p| p != b);
+        }
+        ids.into_iter()
+            .map(|id| {
+                let node = self.nodes.remove(&id).expect("subtree node is live");
+                if let Some(n) = &node.name {
+                    self.names.remove(n);
+                }
+                (id, node)
+            })
+            .collect()
+    }
+}
