@@ -638,7 +638,7 @@ fn a_failed_edit_leaves_the_world_exactly_as_it_was() {
     let next = w.next_serial();
     let before = dump(w.body(b).unwrap());
     // The first MKEV succeeds, the second refuses: nothing of the first remains.
-    let r = w.edit(b, |body, s| {
+    let r = w.transaction(b, |body, s| {
         let (_, v2) = body.mkev(s, f, v, DVec3::X)?;
         body.mkev(s, f, v, DVec3::Y)?; // v is now a wire's positive end
         Ok(v2)
@@ -656,7 +656,7 @@ fn a_failed_edit_leaves_the_world_exactly_as_it_was() {
     ));
     // A locus left non-finite is refused too.
     assert!(matches!(
-        w.edit(b, |body, _| {
+        w.transaction(b, |body, _| {
             body.set_position(v, DVec3::splat(f64::NAN));
             Ok(())
         }),
@@ -668,6 +668,49 @@ fn a_failed_edit_leaves_the_world_exactly_as_it_was() {
         Err(WorldError::Root { .. })
     ));
     assert_eq!(w.revision(), rev);
+    // A kernel operator refuses a non-finite locus before changing anything.
+    assert!(matches!(
+        w.edit(b, |body, s| body.mkev(
+            s,
+            f,
+            v,
+            DVec3::new(0.0, f64::NAN, 0.0)
+        )),
+        Err(WorldError::Euler(EulerError::NonFiniteLocus { .. }))
+    ));
+    assert_eq!(dump(w.body(b).unwrap()), before);
+    assert_eq!(w.revision(), rev);
+    assert_eq!(w.next_serial(), next);
+}
+
+#[test]
+fn edit_changes_an_unshared_body_in_place_and_copies_a_shared_one() {
+    let mut w = World::new();
+    let (b, f, v) = w.mkbfv(DVec3::ZERO).unwrap();
+    let before = Arc::as_ptr(w.body_arc(b).unwrap());
+    w.edit(b, |body, s| body.mkev(s, f, v, DVec3::X)).unwrap();
+    assert_eq!(
+        Arc::as_ptr(w.body_arc(b).unwrap()),
+        before,
+        "no copy when unshared"
+    );
+    let snap = w.clone();
+    let (_, v2) = {
+        let body = w.body(b).unwrap();
+        let e = body.vertex(v).ped;
+        (e, body.other_vertex(e, v).unwrap())
+    };
+    w.edit(b, |body, s| body.mkev(s, f, v2, DVec3::Y)).unwrap();
+    assert!(!Arc::ptr_eq(
+        w.body_arc(b).unwrap(),
+        snap.body_arc(b).unwrap()
+    ));
+    assert_eq!(
+        snap.body(b).unwrap().edge_count(),
+        1,
+        "the snapshot keeps the old body"
+    );
+    assert_eq!(w.body(b).unwrap().edge_count(), 2);
 }
 
 #[test]

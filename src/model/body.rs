@@ -1,7 +1,7 @@
 //! The body: one polyhedron's faces, edges and vertices in compact arenas.
 //!
 //! Baumgart's body node heads three rings (faces, edges, vertices); here each ring is an
-//! [`Arena`] of records addressed by typed 32-bit slot ids, which gives the same
+//! arena of records addressed by typed 32-bit slot ids, which gives the same
 //! sequential access and constant-time deletion without pointers.
 //!
 //! * An [`Edge`] holds its two vertices `vt` (NVT, PVT), its two faces `face` (NFACE,

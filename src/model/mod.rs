@@ -3,7 +3,10 @@
 //! Pure, synchronous Rust with no I/O. A [`Body`] holds one polyhedron's faces, edges
 //! and vertices in compact arenas; the Euler operators ([`euler`]) change its topology
 //! while keeping F − E + V = 2(B − H); the validator ([`check`]) verifies every
-//! invariant; [`geometry`] derives planes, areas and volumes from the vertex loci.
+//! invariant; [`geometry`] derives planes, areas and volumes from the vertex loci;
+//! [`solids`] builds primitives; [`transform`] moves bodies, faces, edges and vertices;
+//! [`world`] holds the bodies in a parts tree ([`parts`], [`pose`]) with cameras and
+//! lights ([`camera`]) and a revision counter.
 
 mod arena;
 pub mod body;

@@ -518,21 +518,48 @@ impl World {
         Ok(Killed { bodies })
     }
 
-    /// Applies `op` (any sequence of kernel operations, typically one Euler operator) to
-    /// body `b`, passing the world's serial counter, and returns its result.
+    /// Applies one kernel operator `op` to body `b` in place, passing the world's serial
+    /// counter, and returns its result.
     ///
-    /// Transactional: `op` works on a private copy of the body and of the counter, which
-    /// replace the originals only if it succeeds; if it fails (even half-way through a
-    /// sequence), the world is unchanged. The copy costs one clone of this body, the
-    /// same price copy-on-write pays whenever a snapshot holds the body.
+    /// Copy-on-write: the body is cloned only if a snapshot still holds it. `op` must
+    /// leave the body and the counter as they were when it returns `Err`, as every
+    /// kernel operator does (each checks all its preconditions before changing
+    /// anything). For a sequence of operators that may fail half-way, use
+    /// [`World::transaction`].
     ///
     /// `op` must leave a valid body (Euler operators do); a body split in two by UNGLUE
     /// inside `op` would be lost with its serials, so use [`World::unglue`] for that, and
     /// [`World::glue`] and its kin for gluing two bodies.
     ///
-    /// Refused for the root (which has no geometry), an unknown body, `op`'s own error,
-    /// or a locus left non-finite.
+    /// Refused for the root (which has no geometry), an unknown body, or `op`'s own error.
     pub fn edit<R>(
+        &mut self,
+        b: BodyId,
+        op: impl FnOnce(&mut Body, &mut Serials) -> Result<R, EulerError>,
+    ) -> Result<R, WorldError> {
+        self.live_part(b, "edited")?;
+        let node = self.tree.get_mut(b).expect("checked");
+        let body = Arc::make_mut(&mut node.body);
+        let r = op(body, &mut self.serials)?;
+        debug_assert!(
+            check_topology(body).is_ok(),
+            "edit left an invalid body: {}",
+            check_topology(body)
+        );
+        self.written();
+        Ok(r)
+    }
+
+    /// Applies `op`, any sequence of kernel operations, to body `b` as one transaction.
+    ///
+    /// `op` works on a private copy of the body and of the serial counter, which replace
+    /// the originals only if it succeeds and leaves every locus finite; if it fails (even
+    /// half-way through a sequence), the world is unchanged. The copy costs one clone of
+    /// the body. The same cautions as for [`World::edit`] apply to UNGLUE and GLUE.
+    ///
+    /// Refused for the root, an unknown body, `op`'s own error, or a locus left
+    /// non-finite.
+    pub fn transaction<R>(
         &mut self,
         b: BodyId,
         op: impl FnOnce(&mut Body, &mut Serials) -> Result<R, EulerError>,
@@ -548,7 +575,7 @@ impl World {
         }
         debug_assert!(
             check_topology(&body).is_ok(),
-            "edit left an invalid body: {}",
+            "transaction left an invalid body: {}",
             check_topology(&body)
         );
         self.serials = serials;

@@ -15,7 +15,7 @@ impl Body {
     /// unchanged; both edges keep E's two faces; PED(VNEW) = ENEW. Every face and vertex
     /// perimeter is as before with VNEW and ENEW inserted.
     ///
-    /// Precondition: `e` is live. Inverse: [`Body::klev`]`(VNEW)`.
+    /// Preconditions (refused otherwise): `e` is live, `pos` is finite. Inverse: [`Body::klev`]`(VNEW)`.
     pub fn esplit(
         &mut self,
         serials: &mut Serials,
@@ -23,6 +23,7 @@ impl Body {
         pos: DVec3,
     ) -> Result<(EdgeId, VertexId), EulerError> {
         self.check_edge(e)?;
+        Self::check_locus(pos)?;
         let (ep, en) = (EdgeUse::new(e, Side::P), EdgeUse::new(e, Side::N));
         let r = *self.edge(e);
         let top = r.vt[1];

@@ -15,7 +15,7 @@ impl Body {
     ///   end it extends the wire; elsewhere it makes a dangling spur into `f`.
     /// * ENEW has PVT = `v`, NVT = VNEW and `f` on both sides; PED(VNEW) = ENEW.
     ///
-    /// Preconditions (refused otherwise): `f` and `v` are live; `v` is on `f` exactly
+    /// Preconditions (refused otherwise): `f` and `v` are live; `pos` is finite; `v` is on `f` exactly
     /// once (so one spur at a vertex per face at a time, and no MKEV at a wire's inner
     /// vertices); `v` is not the positive end of a wire.
     ///
@@ -29,6 +29,7 @@ impl Body {
     ) -> Result<(EdgeId, VertexId), EulerError> {
         self.check_face(f)?;
         self.check_vertex(v)?;
+        Self::check_locus(pos)?;
         let ped = self.vertex(v).ped;
         if ped.is_none() {
             // Seminal vertex: it is on `f` only if `f` is its lone, edgeless face.

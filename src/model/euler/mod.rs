@@ -32,7 +32,7 @@ use super::ids::{EdgeId, FaceId, Serial, VertexId};
 use super::topology::EdgeUse;
 
 /// Why an Euler operator refused. Entities are named by their serial numbers.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum EulerError {
     /// A face id that is not live in this body.
     #[error("face {0:?} is not a live face of this body")]
@@ -152,6 +152,16 @@ pub enum EulerError {
         /// A shared vertex.
         vertex: Serial,
     },
+    /// A locus with a NaN or infinite coordinate.
+    #[error("the locus {x}, {y}, {z} is not finite")]
+    NonFiniteLocus {
+        /// x coordinate.
+        x: f64,
+        /// y coordinate.
+        y: f64,
+        /// z coordinate.
+        z: f64,
+    },
     /// The seam for UNGLUE is not one simple closed loop of edges.
     #[error("the seam is not one simple closed loop of edges: {reason}")]
     BadSeam {
@@ -161,6 +171,17 @@ pub enum EulerError {
 }
 
 impl Body {
+    pub(crate) fn check_locus(p: glam::DVec3) -> Result<(), EulerError> {
+        if p.is_finite() {
+            Ok(())
+        } else {
+            Err(EulerError::NonFiniteLocus {
+                x: p.x,
+                y: p.y,
+                z: p.z,
+            })
+        }
+    }
     pub(crate) fn check_face(&self, f: FaceId) -> Result<(), EulerError> {
         if self.has_face(f) {
             Ok(())
