@@ -1,5 +1,8 @@
 //! Golden tests from the seeds: counts, volumes and validity of the Euler constructions.
 
+mod common;
+
+use common::{face_towards, shift};
 use glam::DVec3;
 use winged::model::solids::{mkcube, mktetra};
 use winged::model::{Body, EulerError, Serials, check_solid, check_topology};
@@ -113,18 +116,9 @@ fn memo_glue_of_two_cubes_is_10_20_12() {
     let mut a = mkcube(&mut s, 2.0, 2.0, 2.0).unwrap();
     let mut b = mkcube(&mut s, 2.0, 2.0, 2.0).unwrap();
     // Put b on top of a: a's top face meets b's bottom face.
-    for v in b.vertices().collect::<Vec<_>>() {
-        let p = b.position(v);
-        b.set_position(v, p + DVec3::Z * 2.0);
-    }
-    let top = a
-        .faces()
-        .find(|&f| a.face_plane(f).unwrap().normal.z > 0.9)
-        .unwrap();
-    let bottom = b
-        .faces()
-        .find(|&f| b.face_plane(f).unwrap().normal.z < -0.9)
-        .unwrap();
+    shift(&mut b, DVec3::Z * 2.0);
+    let top = face_towards(&a, DVec3::Z);
+    let bottom = face_towards(&b, -DVec3::Z);
     let v1 = a.face_vertices(top).next().unwrap();
     let p1 = a.position(v1);
     let v2 = b
@@ -147,22 +141,10 @@ fn geomed_glueff_of_two_separated_cubes_is_a_14_28_16_dumbbell() {
     let mut s = Serials::new();
     let mut a = mkcube(&mut s, 2.0, 2.0, 2.0).unwrap();
     let mut b = mkcube(&mut s, 3.0, 3.0, 3.0).unwrap();
-    for v in a.vertices().collect::<Vec<_>>() {
-        let p = a.position(v);
-        a.set_position(v, p - DVec3::X * 3.0);
-    }
-    for v in b.vertices().collect::<Vec<_>>() {
-        let p = b.position(v);
-        b.set_position(v, p + DVec3::X * 4.0);
-    }
-    let fa = a
-        .faces()
-        .find(|&f| a.face_plane(f).unwrap().normal.x > 0.9)
-        .unwrap();
-    let fb = b
-        .faces()
-        .find(|&f| b.face_plane(f).unwrap().normal.x < -0.9)
-        .unwrap();
+    shift(&mut a, -DVec3::X * 3.0);
+    shift(&mut b, DVec3::X * 4.0);
+    let fa = face_towards(&a, DVec3::X);
+    let fb = face_towards(&b, -DVec3::X);
     let made = a.glueff_bodies(&mut s, fa, &mut b, fb).unwrap();
     assert_eq!(made.len(), 4); // the wasp edge and three MKFEs
     assert_eq!(counts(&a), (14, 28, 16));
@@ -180,14 +162,8 @@ fn geomed_glueff_of_two_separated_cubes_is_a_14_28_16_dumbbell() {
 fn glue_of_two_faces_of_one_body_makes_a_handle() {
     let mut s = Serials::new();
     let mut b = mkcube(&mut s, 2.0, 2.0, 2.0).unwrap();
-    let top = b
-        .faces()
-        .find(|&f| b.face_plane(f).unwrap().normal.z > 0.9)
-        .unwrap();
-    let bottom = b
-        .faces()
-        .find(|&f| b.face_plane(f).unwrap().normal.z < -0.9)
-        .unwrap();
+    let top = face_towards(&b, DVec3::Z);
+    let bottom = face_towards(&b, -DVec3::Z);
     let v1 = b.face_vertices(top).next().unwrap();
     // Pairing v1 with the vertex right below it would turn the vertical edge into a loop.
     let below = b
@@ -219,14 +195,8 @@ fn glue_of_two_faces_of_one_body_makes_a_handle() {
 fn glueff_of_two_faces_of_one_body_is_a_torus() {
     let mut s = Serials::new();
     let mut b = mkcube(&mut s, 2.0, 2.0, 2.0).unwrap();
-    let top = b
-        .faces()
-        .find(|&f| b.face_plane(f).unwrap().normal.z > 0.9)
-        .unwrap();
-    let bottom = b
-        .faces()
-        .find(|&f| b.face_plane(f).unwrap().normal.z < -0.9)
-        .unwrap();
+    let top = face_towards(&b, DVec3::Z);
+    let bottom = face_towards(&b, -DVec3::Z);
     b.glueff(&mut s, top, bottom).unwrap();
     assert_eq!(counts(&b), (8, 16, 8));
     assert_eq!(b.euler_characteristic(), 0);

@@ -3,19 +3,13 @@
 
 mod common;
 
-use common::{assert_valid, canon, canon_by_locus, dump};
+use common::{assert_valid, canon, canon_by_locus, dump, face_towards, shift};
 use glam::DVec3;
 use winged::model::solids::mkcube;
 use winged::model::{Body, EdgeId, EulerError, FaceId, Serials, VertexId, check_solid};
 
 fn cube(s: &mut Serials) -> Body {
     mkcube(s, 2.0, 2.0, 2.0).unwrap()
-}
-
-fn face_towards(b: &Body, n: DVec3) -> FaceId {
-    b.faces()
-        .find(|&f| b.face_plane(f).unwrap().normal.dot(n) > 0.9)
-        .unwrap()
 }
 
 /// Asserts that `op` is refused with an error matching `want` and changes nothing.
@@ -252,10 +246,7 @@ fn unglue_after_glue(flip: bool) {
     let mut s = Serials::new();
     let mut a = cube(&mut s);
     let mut b = cube(&mut s);
-    for v in b.vertices().collect::<Vec<_>>() {
-        let p = b.position(v);
-        b.set_position(v, p + DVec3::Z * 2.0);
-    }
+    shift(&mut b, DVec3::Z * 2.0);
     let (a0, a_shape, b_shape) = (canon(&a), canon_by_locus(&a), canon_by_locus(&b));
     let top = face_towards(&a, DVec3::Z);
     let bottom = face_towards(&b, -DVec3::Z);

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::dump;
+use common::{dump, face_towards};
 use glam::DVec3;
 use winged::model::solids::mkcube;
 use winged::model::{Body, EdgeId, Link, Serials};
@@ -121,14 +121,8 @@ fn vertex_perimeters_run_counter_clockwise_and_list_the_faces_between() {
 #[test]
 fn linked_finds_shared_entities_and_nothing_else() {
     let b = cube();
-    let top = b
-        .faces()
-        .find(|&f| b.face_plane(f).unwrap().normal.z > 0.9)
-        .unwrap();
-    let bottom = b
-        .faces()
-        .find(|&f| b.face_plane(f).unwrap().normal.z < -0.9)
-        .unwrap();
+    let top = face_towards(&b, DVec3::Z);
+    let bottom = face_towards(&b, -DVec3::Z);
     assert_eq!(b.linked_faces(top, bottom), None);
     let side = b.faces().find(|&f| f != top && f != bottom).unwrap();
     let Some(Link::Edge(e)) = b.linked_faces(top, side) else {

@@ -82,8 +82,16 @@ impl<T> Arena<T> {
     #[inline]
     pub fn insert(&mut self, item: T, serial: Serial) -> u32 {
         debug_assert!(serial != Serial::NONE);
+        let slot = self.alloc(item, serial);
+        self.index_insert(serial, slot);
+        slot
+    }
+
+    /// Puts `item` in a free slot (or a new one) under `serial`, without indexing it.
+    #[inline]
+    fn alloc(&mut self, item: T, serial: Serial) -> u32 {
         self.live += 1;
-        let slot = match self.free.pop() {
+        match self.free.pop() {
             Some(slot) => {
                 self.items[slot as usize] = item;
                 self.serials[slot as usize] = serial;
@@ -94,9 +102,7 @@ impl<T> Arena<T> {
                 self.serials.push(serial);
                 (self.items.len() - 1) as u32
             }
-        };
-        self.index_insert(serial, slot);
-        slot
+        }
     }
 
     /// Kills the entity in slot `i`; the slot may be reused.
@@ -142,19 +148,7 @@ impl<T> Arena<T> {
     /// [`Self::resort_index`] after a batch of these. For moving many entities between
     /// bodies at once.
     pub(crate) fn insert_unsorted(&mut self, item: T, serial: Serial) -> u32 {
-        self.live += 1;
-        let slot = match self.free.pop() {
-            Some(slot) => {
-                self.items[slot as usize] = item;
-                self.serials[slot as usize] = serial;
-                slot
-            }
-            None => {
-                self.items.push(item);
-                self.serials.push(serial);
-                (self.items.len() - 1) as u32
-            }
-        };
+        let slot = self.alloc(item, serial);
         self.index_serials.push(serial);
         self.index_slots.push(slot);
         slot

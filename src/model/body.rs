@@ -55,6 +55,18 @@ pub struct Edge {
 }
 
 impl Edge {
+    /// An edge between `vt` and with faces `face` (each `[N, P]`), its wings not yet
+    /// linked (the caller links them with `set_next`).
+    #[inline]
+    pub(crate) fn unlinked(vt: [VertexId; 2], face: [FaceId; 2]) -> Self {
+        Edge {
+            vt,
+            face,
+            cw: [EdgeId::NONE; 2],
+            ccw: [EdgeId::NONE; 2],
+        }
+    }
+
     /// Negative vertex.
     #[inline]
     pub fn nvt(&self) -> VertexId {

@@ -4,7 +4,8 @@
 
 use std::collections::BTreeMap;
 
-use winged::model::{Body, check_topology};
+use glam::DVec3;
+use winged::model::{Body, FaceId, check_topology};
 
 /// Everything observable about a body, by serial number: for an exact "unchanged" test.
 #[derive(Debug, PartialEq)]
@@ -131,4 +132,19 @@ fn least_rotation<T: Ord + Clone>(c: Vec<T>) -> Vec<T> {
         })
         .min()
         .unwrap_or_default()
+}
+
+/// The first face whose outward normal points along `n` (within about 25°).
+pub fn face_towards(b: &Body, n: DVec3) -> FaceId {
+    b.faces()
+        .find(|&f| b.face_plane(f).is_some_and(|p| p.normal.dot(n) > 0.9))
+        .expect("a face pointing that way")
+}
+
+/// Moves every vertex of `b` by `d`.
+pub fn shift(b: &mut Body, d: DVec3) {
+    for v in b.vertices().collect::<Vec<_>>() {
+        let p = b.position(v);
+        b.set_position(v, p + d);
+    }
 }

@@ -32,15 +32,7 @@ impl Body {
         let nn = self.next(en); // leaves PVT, after E's N use
 
         let vnew = self.mkv(serials, pos, EdgeId::NONE);
-        let enew = self.mke(
-            serials,
-            Edge {
-                vt: [vnew, top],
-                face: r.face,
-                cw: [EdgeId::NONE; 2],
-                ccw: [EdgeId::NONE; 2],
-            },
-        );
+        let enew = self.mke(serials, Edge::unlinked([vnew, top], r.face));
         self.edge_mut(e).vt[1] = vnew;
         let (np, nnew) = (EdgeUse::new(enew, Side::P), EdgeUse::new(enew, Side::N));
         // E's uses at PVT now belong to ENEW.

@@ -381,15 +381,7 @@ impl Body {
                 break;
             }
         }
-        let e = self.mke(
-            serials,
-            Edge {
-                vt: [v2, v1],
-                face: [f1, f1],
-                cw: [EdgeId::NONE; 2],
-                ccw: [EdgeId::NONE; 2],
-            },
-        );
+        let e = self.mke(serials, Edge::unlinked([v2, v1], [f1, f1]));
         let (up, un) = (EdgeUse::new(e, Side::P), EdgeUse::new(e, Side::N));
         self.set_next(i1, up);
         self.set_next(up, o2);

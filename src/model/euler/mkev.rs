@@ -31,7 +31,9 @@ impl Body {
         self.check_vertex(v)?;
         Self::check_locus(pos)?;
         let ped = self.vertex(v).ped;
-        if ped.is_none() {
+        // The corner of `f` at `v` the spur goes into, as (incoming, outgoing) uses;
+        // `None` for the lone vertex of a seminal body.
+        let corner = if ped.is_none() {
             // Seminal vertex: it is on `f` only if `f` is its lone, edgeless face.
             if !self.face(f).ped.is_none() {
                 return Err(EulerError::VertexNotOnFace {
@@ -39,51 +41,34 @@ impl Body {
                     face: self.face_serial(f),
                 });
             }
-            let vnew = self.mkv(serials, pos, EdgeId::NONE);
-            let e = self.mke(
-                serials,
-                Edge {
-                    vt: [vnew, v],
-                    face: [f, f],
-                    cw: [EdgeId::NONE; 2],
-                    ccw: [EdgeId::NONE; 2],
-                },
-            );
-            *self.edge_mut(e) = Edge {
-                vt: [vnew, v],
-                face: [f, f],
-                cw: [e; 2],
-                ccw: [e; 2],
-            };
-            self.vertex_mut(vnew).ped = e;
-            self.vertex_mut(v).ped = e;
-            self.face_mut(f).ped = e;
-            return Ok((e, vnew));
-        }
-        let out = self.corner(v, f)?;
-        let r = self.edge(ped);
-        // A wire is a body of one face; its positive end is a valence-one PVT.
-        let valence_one_pvt = r.vt[1] == v && r.cw[1] == ped;
-        if valence_one_pvt && self.face_count() == 1 {
-            return Err(EulerError::WirePositiveEnd {
-                vertex: self.vertex_serial(v),
-            });
-        }
-        let inc = self.prev(out);
+            None
+        } else {
+            let out = self.corner(v, f)?;
+            let r = self.edge(ped);
+            // A wire is a body of one face; its positive end is a valence-one PVT.
+            let valence_one_pvt = r.vt[1] == v && r.cw[1] == ped;
+            if valence_one_pvt && self.face_count() == 1 {
+                return Err(EulerError::WirePositiveEnd {
+                    vertex: self.vertex_serial(v),
+                });
+            }
+            Some((self.prev(out), out))
+        };
         let vnew = self.mkv(serials, pos, EdgeId::NONE);
-        let e = self.mke(
-            serials,
-            Edge {
-                vt: [vnew, v],
-                face: [f, f],
-                cw: [EdgeId::NONE; 2],
-                ccw: [EdgeId::NONE; 2],
-            },
-        );
+        let e = self.mke(serials, Edge::unlinked([vnew, v], [f, f]));
         let (up, un) = (EdgeUse::new(e, Side::P), EdgeUse::new(e, Side::N));
-        self.set_next(inc, up);
         self.set_next(up, un);
-        self.set_next(un, out);
+        match corner {
+            Some((inc, out)) => {
+                self.set_next(inc, up);
+                self.set_next(un, out);
+            }
+            None => {
+                self.set_next(un, up);
+                self.vertex_mut(v).ped = e;
+                self.face_mut(f).ped = e;
+            }
+        }
         self.vertex_mut(vnew).ped = e;
         Ok((e, vnew))
     }

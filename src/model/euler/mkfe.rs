@@ -49,15 +49,7 @@ impl Body {
         let i2 = self.prev(o2);
 
         let fnew = self.mkf(serials, EdgeId::NONE);
-        let e = self.mke(
-            serials,
-            Edge {
-                vt: [v2, v1],
-                face: [fnew, f],
-                cw: [EdgeId::NONE; 2],
-                ccw: [EdgeId::NONE; 2],
-            },
-        );
+        let e = self.mke(serials, Edge::unlinked([v2, v1], [fnew, f]));
         // The run o1 .. i2 of the old perimeter goes to the new face.
         let mut u = o1;
         loop {

@@ -73,12 +73,7 @@ impl Body {
             .map(|i| {
                 self.mke(
                     serials,
-                    Edge {
-                        vt: [xs2[i], xs2[(i + 1) % n]],
-                        face: [new_face, far[i].0],
-                        cw: [EdgeId::NONE; 2],
-                        ccw: [EdgeId::NONE; 2],
-                    },
+                    Edge::unlinked([xs2[i], xs2[(i + 1) % n]], [new_face, far[i].0]),
                 )
             })
             .collect();

@@ -64,12 +64,10 @@ impl Body {
             let r = self.edge(e);
             map.edges[e.index()] = b.mke(
                 serials,
-                Edge {
-                    vt: r.vt.map(|v| map.vertices[v.index()]),
-                    face: r.face.map(|f| map.faces[f.index()]),
-                    cw: [EdgeId::NONE; 2],
-                    ccw: [EdgeId::NONE; 2],
-                },
+                Edge::unlinked(
+                    r.vt.map(|v| map.vertices[v.index()]),
+                    r.face.map(|f| map.faces[f.index()]),
+                ),
             );
         }
         let edge_of = |e: EdgeId| {

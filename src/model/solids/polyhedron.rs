@@ -374,15 +374,7 @@ impl Plan {
                 let t = self.twin[h] as usize;
                 if h < t {
                     let (a, bb) = (vids[f[k] as usize], vids[f[(k + 1) % f.len()] as usize]);
-                    let e = b.mke(
-                        serials,
-                        Edge {
-                            vt: [bb, a],
-                            face: [FaceId::NONE, fids[fi]],
-                            cw: [EdgeId::NONE; 2],
-                            ccw: [EdgeId::NONE; 2],
-                        },
-                    );
+                    let e = b.mke(serials, Edge::unlinked([bb, a], [FaceId::NONE, fids[fi]]));
                     use_of[h] = EdgeUse::new(e, Side::P);
                     use_of[t] = EdgeUse::new(e, Side::N);
                 }
