@@ -80,6 +80,12 @@ fn main() {
         size_of::<Vertex>(),
         size_of::<Face>()
     );
-    weigh("torus 1000x500, 1M triangles", &mesh::torus_triangles(1000, 500));
-    weigh("uv sphere 1000x501, 1M triangles", &mesh::uv_sphere(1000, 501));
+    weigh(
+        "torus 1000x500, 1M triangles",
+        &mesh::torus_triangles(1000, 500),
+    );
+    weigh(
+        "uv sphere 1000x501, 1M triangles",
+        &mesh::uv_sphere(1000, 501),
+    );
 }
