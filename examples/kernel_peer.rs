@@ -16,8 +16,10 @@ use std::time::Instant;
 
 use winged::model::{Body, EdgeId, FaceId, Serials, check_solid};
 
-/// Repetitions of each timed loop; the best is reported.
+/// Repetitions of each timed loop; the best is reported. The perimeter walks are short
+/// and noisy, so they run more often.
 const REPS: usize = 3;
+const WALK_REPS: usize = 10;
 /// The small meshes: a 32 × 16 torus grid (1,024 triangles, or 512 quads).
 const SMALL: (u32, u32) = (32, 16);
 /// The big meshes: a 1000 × 500 torus grid (1,000,000 triangles, or 500,000 quads).
@@ -39,9 +41,9 @@ fn wanted(names: &[&str]) -> bool {
     }
 }
 
-/// Best wall time of `REPS` runs of `f`, in nanoseconds.
-fn best_ns(mut f: impl FnMut()) -> f64 {
-    (0..REPS)
+/// Best wall time of `reps` runs of `f`, in nanoseconds.
+fn best_ns(reps: usize, mut f: impl FnMut()) -> f64 {
+    (0..reps)
         .map(|_| {
             let t = Instant::now();
             f();
@@ -59,7 +61,7 @@ fn build<const N: usize>(s: &mut Serials, m: &mesh::Mesh<N>) -> Body {
 fn esplit_klev(b: &mut Body, s: &mut Serials, rounds: usize) -> f64 {
     let edges: Vec<EdgeId> = b.edges().collect();
     let counts = (b.face_count(), b.edge_count(), b.vertex_count());
-    let ns = best_ns(|| {
+    let ns = best_ns(REPS, || {
         for _ in 0..rounds {
             for &e in &edges {
                 let r = *b.edge(e);
@@ -78,7 +80,7 @@ fn esplit_klev(b: &mut Body, s: &mut Serials, rounds: usize) -> f64 {
 fn mkfe_klfe(b: &mut Body, s: &mut Serials, rounds: usize) -> f64 {
     let faces: Vec<FaceId> = b.faces().collect();
     let counts = (b.face_count(), b.edge_count(), b.vertex_count());
-    let ns = best_ns(|| {
+    let ns = best_ns(REPS, || {
         for _ in 0..rounds {
             for &f in &faces {
                 let u0 = b.face_first_use(f).unwrap();
@@ -123,7 +125,7 @@ fn main() {
 
     // Building the million-triangle body.
     if wanted(&["build_1m"]) {
-        let ns = best_ns(|| {
+        let ns = best_ns(REPS, || {
             let mut s = Serials::new();
             black_box(build(&mut s, &big_tri));
         });
@@ -148,7 +150,7 @@ fn main() {
     // Perimeter circulation.
     let mut uses = 0usize;
     if wanted(&["face_vertices_1m"]) {
-        let ns = best_ns(|| {
+        let ns = best_ns(WALK_REPS, || {
             let (mut n, mut acc) = (0usize, 0usize);
             for f in b.faces() {
                 for v in b.face_vertices(f) {
@@ -162,7 +164,7 @@ fn main() {
         row("face_vertices_1m", ns / uses as f64, "ns/use");
     }
     if wanted(&["vertex_vertices_1m"]) {
-        let ns = best_ns(|| {
+        let ns = best_ns(WALK_REPS, || {
             let (mut n, mut acc) = (0usize, 0usize);
             for v in b.vertices() {
                 for u in b.vertex_uses(v) {

@@ -51,7 +51,7 @@ lowest "$out/winged.all" >"$out/winged.tsv"
 
 echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores;" \
     "OpenMesh $(dpkg-query -W -f '${Version}' libopenmesh-dev); $(rustc --version)"
-echo "# lowest of $runs runs x 3 repetitions each; every figure is a cost, so ratio < 1 means winged is cheaper"
+echo "# lowest of $runs runs x 3 repetitions each (10 for the perimeter walks); every figure is a cost, so ratio < 1 means winged is cheaper"
 # Rows only the OpenMesh program has (e.g. *_checked) compare with winged's row of the
 # same name without the suffix: winged's operators always check their preconditions.
 awk -F'\t' '
