@@ -9,6 +9,10 @@
 
 use super::ids::Serial;
 
+/// Stale index entries always tolerated before a compaction, on top of one per live
+/// entity: keeps small bodies from compacting every few operations.
+const STALE_SLACK: usize = 4096;
+
 /// Slot storage for one kind of entity (faces, edges or vertices) of one body.
 #[derive(Clone, Debug)]
 pub struct Arena<T> {
@@ -114,8 +118,8 @@ impl<T> Arena<T> {
         self.serials[i] = Serial::NONE;
         self.free.push(i as u32);
         self.live -= 1;
-        if self.index_serials.len() > 2 * self.live + 64 {
-            self.compact_index();
+        if self.index_serials.len() > 2 * self.live + STALE_SLACK {
+            self.compact_index_cold();
         }
     }
 
@@ -176,6 +180,7 @@ impl<T> Arena<T> {
         self.index_slots.reserve(n);
     }
 
+    #[inline]
     fn index_insert(&mut self, serial: Serial, slot: u32) {
         match self.index_serials.last() {
             Some(&last) if last >= serial => {
@@ -190,6 +195,12 @@ impl<T> Arena<T> {
                 self.index_slots.push(slot);
             }
         }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn compact_index_cold(&mut self) {
+        self.compact_index();
     }
 
     fn compact_index(&mut self) {

@@ -154,13 +154,7 @@ impl Body {
 
     /// The uses of face `f`'s perimeter, counter-clockwise from PED(f).
     pub fn face_uses(&self, f: FaceId) -> FaceUses<'_> {
-        let start = self.face_first_use(f);
-        FaceUses {
-            body: self,
-            start,
-            cur: start,
-            budget: 2 * self.edges.slots() + 2,
-        }
+        FaceUses(Walk::new(self, self.face_first_use(f)))
     }
     /// The edges of face `f`'s perimeter, counter-clockwise (a spur edge appears twice).
     pub fn face_edges(&self, f: FaceId) -> impl Iterator<Item = EdgeId> + '_ {
@@ -172,13 +166,7 @@ impl Body {
     }
     /// The outgoing uses at vertex `v`, counter-clockwise from PED(v).
     pub fn vertex_uses(&self, v: VertexId) -> VertexUses<'_> {
-        let start = self.vertex_first_use(v);
-        VertexUses {
-            body: self,
-            start,
-            cur: start,
-            budget: 2 * self.edges.slots() + 2,
-        }
+        VertexUses(Walk::new(self, self.vertex_first_use(v)))
     }
     /// The edges at vertex `v`, counter-clockwise.
     pub fn vertex_edges(&self, v: VertexId) -> impl Iterator<Item = EdgeId> + '_ {
@@ -372,43 +360,65 @@ impl Body {
     }
 }
 
-/// Iterator over a face's perimeter: see [`Body::face_uses`].
-pub struct FaceUses<'a> {
+/// A walk round a ring of edge uses, stopping when it is back at its start. A budget of
+/// one step per edge side (plus slack) stops it on a corrupted structure that never
+/// closes, which only misuse of [`Body::wing`] can make.
+struct Walk<'a> {
     body: &'a Body,
-    start: Option<EdgeUse>,
-    cur: Option<EdgeUse>,
-    budget: usize,
+    start: EdgeUse,
+    cur: EdgeUse,
+    left: usize,
 }
+
+impl<'a> Walk<'a> {
+    fn new(body: &'a Body, start: Option<EdgeUse>) -> Self {
+        let (start, left) = match start {
+            Some(u) => (u, 2 * body.edges.slots() + 2),
+            None => (EdgeUse::new(EdgeId::NONE, Side::P), 0),
+        };
+        Walk {
+            body,
+            start,
+            cur: start,
+            left,
+        }
+    }
+
+    #[inline]
+    fn step(&mut self, next: impl Fn(&Body, EdgeUse) -> EdgeUse) -> Option<EdgeUse> {
+        if self.left == 0 {
+            return None;
+        }
+        let u = self.cur;
+        self.cur = next(self.body, u);
+        self.left = if self.cur == self.start {
+            0
+        } else {
+            self.left - 1
+        };
+        Some(u)
+    }
+}
+
+/// Iterator over a face's perimeter: see [`Body::face_uses`].
+pub struct FaceUses<'a>(Walk<'a>);
 
 impl Iterator for FaceUses<'_> {
     type Item = EdgeUse;
     #[inline]
     fn next(&mut self) -> Option<EdgeUse> {
-        let u = self.cur?;
-        self.budget = self.budget.checked_sub(1)?;
-        let n = self.body.next(u);
-        self.cur = if Some(n) == self.start { None } else { Some(n) };
-        Some(u)
+        self.0.step(Body::next)
     }
 }
 
 /// Iterator over a vertex's perimeter: see [`Body::vertex_uses`].
-pub struct VertexUses<'a> {
-    body: &'a Body,
-    start: Option<EdgeUse>,
-    cur: Option<EdgeUse>,
-    budget: usize,
-}
+pub struct VertexUses<'a>(Walk<'a>);
 
 impl Iterator for VertexUses<'_> {
     type Item = EdgeUse;
     #[inline]
     fn next(&mut self) -> Option<EdgeUse> {
-        let u = self.cur?;
-        self.budget = self.budget.checked_sub(1)?;
-        let n = self.body.ccw_about_origin(u);
-        self.cur = if Some(n) == self.start { None } else { Some(n) };
-        Some(u)
+        self.0.step(Body::ccw_about_origin)
     }
 }
 

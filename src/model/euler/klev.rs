@@ -23,22 +23,69 @@ impl Body {
                 vertex: self.vertex_serial(v),
             });
         }
-        let valence = self.vertex_uses(v).take(3).count();
-        if valence > 2 {
+        let uk = EdgeUse::new(k, self.side_at(k, v)); // v → keep along PED(v)
+        let keep = self.dest(uk);
+        let ue = self.ccw_about_origin(uk);
+        if ue == uk {
+            self.kill_spur_tip(uk);
+            return Ok(keep);
+        }
+        if self.ccw_about_origin(ue) != uk {
             return Err(EulerError::Valence {
                 vertex: self.vertex_serial(v),
                 valence: self.valence(v),
             });
         }
-        let keep = self.other_vertex(k, v).unwrap_or(v);
-        if let Some(loop_edge) = self.other_edge_joining(v, keep, k) {
-            return Err(self.loop_error(v, keep, loop_edge));
+        // Valence two: the only edge that could become a loop is the other one at v.
+        if self.dest(ue) == keep {
+            return Err(self.loop_error(v, keep, ue.edge));
         }
-        if self.edge(k).vt[0] != v {
-            self.invert(k);
-        }
-        self.contract(k);
+        self.unsplit(uk, ue);
         Ok(keep)
+    }
+
+    /// KLEV at a vertex of valence one: kills the spur (or wire end) `uk`, which runs
+    /// from the tip to the vertex that stays.
+    fn kill_spur_tip(&mut self, uk: EdgeUse) {
+        let (k, tip, keep) = (uk.edge, self.origin(uk), self.dest(uk));
+        let f = self.use_face(uk);
+        let (before, after) = (self.prev(uk.twin()), self.next(uk));
+        if before == uk {
+            // The only edge of a wire: back to a seminal body.
+            self.vertex_mut(keep).ped = EdgeId::NONE;
+            self.face_mut(f).ped = EdgeId::NONE;
+        } else {
+            self.set_next(before, after);
+            self.repoint_face_ped(f, k, after.edge);
+            self.repoint_vertex_ped(keep, k, after.edge);
+        }
+        self.klv(tip);
+        self.kle(k);
+    }
+
+    /// KLEV at a vertex of valence two: `uk` and `ue` leave it along its two edges; `uk`'s
+    /// edge and the vertex die and `ue`'s edge takes over `uk`'s far end. Undoes ESPLIT
+    /// exactly when `uk` is the split's new edge.
+    fn unsplit(&mut self, uk: EdgeUse, ue: EdgeUse) {
+        let (k, v, keep) = (uk.edge, self.origin(uk), self.dest(uk));
+        let (face_a, face_b) = (self.use_face(uk), self.use_face(ue));
+        let mut after = self.next(uk); // leaves keep in face A
+        let mut before = self.prev(uk.twin()); // arrives at keep in face B
+        // If keep is a spur tip, the turn at keep now goes round `ue`'s edge.
+        if after == uk.twin() {
+            after = ue;
+        }
+        if before == uk {
+            before = ue.twin();
+        }
+        self.edge_mut(ue.edge).vt[ue.side.ix()] = keep;
+        self.set_next(ue.twin(), after);
+        self.set_next(before, ue);
+        self.repoint_face_ped(face_a, k, ue.edge);
+        self.repoint_face_ped(face_b, k, ue.edge);
+        self.repoint_vertex_ped(keep, k, ue.edge);
+        self.klv(v);
+        self.kle(k);
     }
 
     /// KLVE(E): kills edge `e` and its NVT, moving every other edge at NVT to PVT (the
@@ -123,12 +170,12 @@ impl Body {
         }
         let alive_p = if np == en { nn.edge } else { np.edge };
         let alive_n = if nn == ep { np.edge } else { nn.edge };
-        self.repoint_peds(e, alive_p, &[r.face[1]], &[]);
-        self.repoint_peds(e, alive_n, &[r.face[0]], &[]);
+        self.repoint_face_ped(r.face[1], e, alive_p);
+        self.repoint_face_ped(r.face[0], e, alive_n);
         // Prefer an edge that came over from `gone`, so that KLEV after ESPLIT gives the
         // surviving vertex back its old PED.
         let keep_ped = first_moved.unwrap_or(alive_n);
-        self.repoint_peds(e, keep_ped, &[], &[keep]);
+        self.repoint_vertex_ped(keep, e, keep_ped);
         self.klv(gone);
         self.kle(e);
     }

@@ -38,8 +38,8 @@ impl Body {
         if self.face(fpos).ped == e {
             self.face_mut(fpos).ped = nn.edge;
         }
-        self.repoint_peds(e, nn.edge, &[], &[r.vt[1]]);
-        self.repoint_peds(e, np.edge, &[], &[r.vt[0]]);
+        self.repoint_vertex_ped(r.vt[1], e, nn.edge);
+        self.repoint_vertex_ped(r.vt[0], e, np.edge);
         self.klf(fneg);
         self.kle(e);
         Ok(fpos)

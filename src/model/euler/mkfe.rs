@@ -35,16 +35,7 @@ impl Body {
                 vertex: self.vertex_serial(v1),
             });
         }
-        for v in [v1, v2] {
-            if self.vertex(v).ped.is_none() {
-                return Err(EulerError::VertexNotOnFace {
-                    vertex: self.vertex_serial(v),
-                    face: self.face_serial(f),
-                });
-            }
-        }
-        let o1 = self.corner(v1, f)?;
-        let o2 = self.corner(v2, f)?;
+        let (o1, o2) = self.two_corners(f, v1, v2)?;
         let i1 = self.prev(o1);
         let i2 = self.prev(o2);
 
@@ -67,5 +58,37 @@ impl Body {
         self.face_mut(f).ped = e;
         self.face_mut(fnew).ped = e;
         Ok((e, fnew))
+    }
+
+    /// The corners of face `f` at `v1` and at `v2` (the uses leaving each), found in one
+    /// walk of `f`'s perimeter; refused unless each vertex is on `f` exactly once.
+    fn two_corners(
+        &self,
+        f: FaceId,
+        v1: VertexId,
+        v2: VertexId,
+    ) -> Result<(EdgeUse, EdgeUse), EulerError> {
+        let (mut c1, mut c2) = ((None, 0), (None, 0));
+        for u in self.face_uses(f) {
+            let o = self.origin(u);
+            if o == v1 {
+                c1 = (Some(u), c1.1 + 1);
+            } else if o == v2 {
+                c2 = (Some(u), c2.1 + 1);
+            }
+        }
+        let pick = |(u, n): (Option<EdgeUse>, usize), v: VertexId| match (u, n) {
+            (Some(u), 1) => Ok(u),
+            (None, _) => Err(EulerError::VertexNotOnFace {
+                vertex: self.vertex_serial(v),
+                face: self.face_serial(f),
+            }),
+            (Some(_), corners) => Err(EulerError::AmbiguousCorner {
+                vertex: self.vertex_serial(v),
+                face: self.face_serial(f),
+                corners,
+            }),
+        };
+        Ok((pick(c1, v1)?, pick(c2, v2)?))
     }
 }

@@ -243,24 +243,21 @@ impl Body {
             .find(|&e| e != except && self.other_vertex(e, a) == Some(b))
     }
 
-    /// Re-points every face and vertex PED that names `dead` to `alive`, for the faces
-    /// and vertices listed.
-    pub(crate) fn repoint_peds(
-        &mut self,
-        dead: EdgeId,
-        alive: EdgeId,
-        faces: &[FaceId],
-        verts: &[VertexId],
-    ) {
-        for &f in faces {
-            if self.has_face(f) && self.face(f).ped == dead {
-                self.face_mut(f).ped = alive;
-            }
+    /// If face `f`'s PED is `dead`, makes it `alive`. Precondition: `f` is live.
+    #[inline]
+    pub(crate) fn repoint_face_ped(&mut self, f: FaceId, dead: EdgeId, alive: EdgeId) {
+        let r = self.face_mut(f);
+        if r.ped == dead {
+            r.ped = alive;
         }
-        for &v in verts {
-            if self.has_vertex(v) && self.vertex(v).ped == dead {
-                self.vertex_mut(v).ped = alive;
-            }
+    }
+
+    /// If vertex `v`'s PED is `dead`, makes it `alive`. Precondition: `v` is live.
+    #[inline]
+    pub(crate) fn repoint_vertex_ped(&mut self, v: VertexId, dead: EdgeId, alive: EdgeId) {
+        let r = self.vertex_mut(v);
+        if r.ped == dead {
+            r.ped = alive;
         }
     }
 }
