@@ -4,6 +4,7 @@
 //! as a library on its own.
 
 pub mod model;
+pub mod server;
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

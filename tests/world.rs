@@ -641,7 +641,7 @@ fn a_failed_edit_leaves_the_world_exactly_as_it_was() {
     let r = w.transaction(b, |body, s| {
         let (_, v2) = body.mkev(s, f, v, DVec3::X)?;
         body.mkev(s, f, v, DVec3::Y)?; // v is now a wire's positive end
-        Ok(v2)
+        Ok::<_, EulerError>(v2)
     });
     assert!(matches!(
         r,
@@ -658,13 +658,13 @@ fn a_failed_edit_leaves_the_world_exactly_as_it_was() {
     assert!(matches!(
         w.transaction(b, |body, _| {
             body.set_position(v, DVec3::splat(f64::NAN));
-            Ok(())
+            Ok::<_, EulerError>(())
         }),
         Err(WorldError::NonFinite { .. })
     ));
     assert_eq!(dump(w.body(b).unwrap()), before);
     assert!(matches!(
-        w.edit(w.root(), |_, _| Ok(())),
+        w.edit(w.root(), |_, _| Ok::<_, EulerError>(())),
         Err(WorldError::Root { .. })
     ));
     assert_eq!(w.revision(), rev);

@@ -63,6 +63,9 @@ pub enum WorldError {
     /// Building a body from vertex and face lists was refused.
     #[error(transparent)]
     Build(#[from] BuildError),
+    /// A solid primitive refused.
+    #[error(transparent)]
+    Solid(#[from] crate::model::solids::SolidError),
     /// No live body has this id.
     #[error("body {0} does not exist")]
     UnknownBody(BodyId),
@@ -532,11 +535,14 @@ impl World {
     /// [`World::glue`] and its kin for gluing two bodies.
     ///
     /// Refused for the root (which has no geometry), an unknown body, or `op`'s own error.
-    pub fn edit<R>(
+    pub fn edit<R, E>(
         &mut self,
         b: BodyId,
-        op: impl FnOnce(&mut Body, &mut Serials) -> Result<R, EulerError>,
-    ) -> Result<R, WorldError> {
+        op: impl FnOnce(&mut Body, &mut Serials) -> Result<R, E>,
+    ) -> Result<R, WorldError>
+    where
+        WorldError: From<E>,
+    {
         self.live_part(b, "edited")?;
         let node = self.tree.get_mut(b).expect("checked");
         let body = Arc::make_mut(&mut node.body);
@@ -559,11 +565,14 @@ impl World {
     ///
     /// Refused for the root, an unknown body, `op`'s own error, or a locus left
     /// non-finite.
-    pub fn transaction<R>(
+    pub fn transaction<R, E>(
         &mut self,
         b: BodyId,
-        op: impl FnOnce(&mut Body, &mut Serials) -> Result<R, EulerError>,
-    ) -> Result<R, WorldError> {
+        op: impl FnOnce(&mut Body, &mut Serials) -> Result<R, E>,
+    ) -> Result<R, WorldError>
+    where
+        WorldError: From<E>,
+    {
         let node = self.live_part(b, "edited")?;
         let mut body = Body::clone(&node.body);
         let mut serials = self.serials.clone();

@@ -1,0 +1,750 @@
+//! Edits: every write the server accepts, as data, and how each one is applied to the
+//! world.
+//!
+//! An [`Edit`] names entities by their serial numbers and carries everything needed to
+//! apply it again (a shape's parameters, a vertex's locus), so that the same sequence of
+//! edits on an empty world gives the same world with the same ids. The actor applies
+//! edits one at a time; [`apply`] either changes the world and returns an [`Outcome`] or
+//! refuses with an [`EditError`] and changes nothing.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::dto::{
+    CameraReq, CameraReqError, CreateBody, EulerOp, FrameDto, LightDto, PatchBody, Shape,
+    SweepKind, SweepReq, TransformOp, TransformReq, points2,
+};
+use crate::model::solids::{
+    BuildError, SolidError, Twist, box_solid, cone, cylinder, mktetra, prism_solid, pyramid_solid,
+    sphere, torus,
+};
+use crate::model::{
+    Body, BodyId, EdgeId, Entity, EulerError, FaceId, Frame, LightError, Pose, Serial, Transform,
+    VertexId, World, WorldError,
+};
+
+/// The most faces a body made by one request may have.
+pub const MAX_BODY_FACES: usize = 2_000_000;
+
+/// One write to the world.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "edit", rename_all = "snake_case")]
+pub enum Edit {
+    /// Make a body.
+    CreateBody(CreateBody),
+    /// Rename, re-parent or re-pose a body.
+    PatchBody {
+        /// The body.
+        body: u64,
+        /// What changes.
+        patch: PatchBody,
+    },
+    /// KLBFEV: kill a body with all its parts.
+    DeleteBody {
+        /// The body.
+        body: u64,
+    },
+    /// An Euler operator on a body.
+    Euler {
+        /// The body.
+        body: u64,
+        /// The operator.
+        op: EulerOp,
+    },
+    /// A Euclidean transform of a body or one of its faces, edges or vertices.
+    Transform {
+        /// The body.
+        body: u64,
+        /// The transform.
+        req: TransformReq,
+    },
+    /// A sweep of a face.
+    Sweep {
+        /// The body.
+        body: u64,
+        /// The sweep.
+        req: SweepReq,
+    },
+    /// FVDUAL.
+    Dual {
+        /// The body.
+        body: u64,
+    },
+    /// EVERT.
+    Evert {
+        /// The body.
+        body: u64,
+    },
+    /// MKCOPY: a copy beside the original, under the same supart.
+    Copy {
+        /// The body.
+        body: u64,
+        /// The copy's name.
+        name: Option<String>,
+    },
+    /// Store a camera.
+    PutCamera {
+        /// Its name.
+        name: String,
+        /// The camera.
+        camera: CameraReq,
+    },
+    /// Remove a camera.
+    DeleteCamera {
+        /// Its name.
+        name: String,
+    },
+    /// Store a light.
+    PutLight {
+        /// Its name.
+        name: String,
+        /// The light.
+        light: LightDto,
+    },
+    /// Remove a light.
+    DeleteLight {
+        /// Its name.
+        name: String,
+    },
+}
+
+/// What an applied edit made or changed, by id.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Default)]
+pub struct Outcome {
+    /// A body made (or the body changed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub id: Option<u64>,
+    /// A face made, or the face that survived.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub face: Option<u64>,
+    /// An edge made, or the edge that survived.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub edge: Option<u64>,
+    /// A vertex made, or the vertex that survived.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vertex: Option<u64>,
+    /// Several edges made (GLUEFF).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub new_edges: Vec<u64>,
+    /// The second new face (UNGLUE).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub new_face: Option<u64>,
+    /// A body split off (UNGLUE).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub split_off: Option<u64>,
+    /// Bodies killed.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub killed: Vec<u64>,
+    /// Face, edge and vertex counts of the body made or changed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub faces: Option<usize>,
+    /// Edge count.
+    #[serde(skip_serializing_if = "Option::is_none", rename = "edges")]
+    pub edges_count: Option<usize>,
+    /// Vertex count.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vertices: Option<usize>,
+}
+
+/// Why an edit was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum EditError {
+    /// The world refused (unknown ids, a refused Euler operator, bad names, ...).
+    #[error(transparent)]
+    World(#[from] WorldError),
+    /// A solid's parameters are not a solid.
+    #[error(transparent)]
+    Solid(#[from] SolidError),
+    /// The camera request is not a camera.
+    #[error(transparent)]
+    Camera(#[from] CameraReqError),
+    /// The light request is not a light.
+    #[error(transparent)]
+    Light(#[from] LightError),
+    /// An id that names nothing, or names something of another kind or body.
+    #[error("{what} {id} is not a {kind} of body {body}")]
+    NotInBody {
+        /// "face", "edge" or "vertex".
+        what: &'static str,
+        /// The id given.
+        id: u64,
+        /// The kind expected.
+        kind: &'static str,
+        /// The body.
+        body: u64,
+    },
+    /// An id that names nothing in the world.
+    #[error("no {what} has id {id}")]
+    Unknown {
+        /// What was looked for.
+        what: &'static str,
+        /// The id given.
+        id: u64,
+    },
+    /// A request that would make too big a body.
+    #[error("the body would have {faces} faces; at most {max} are allowed per request")]
+    TooLarge {
+        /// Faces it would have.
+        faces: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// A number that is NaN or infinite, or otherwise out of range.
+    #[error("{0}")]
+    BadNumber(String),
+}
+
+impl From<EulerError> for EditError {
+    fn from(e: EulerError) -> Self {
+        EditError::World(WorldError::Euler(e))
+    }
+}
+
+impl From<BuildError> for EditError {
+    fn from(e: BuildError) -> Self {
+        EditError::World(WorldError::Build(e))
+    }
+}
+
+fn body_id(world: &World, id: u64) -> Result<BodyId, EditError> {
+    let b = BodyId(Serial(id));
+    if world.node(b).is_some() {
+        Ok(b)
+    } else {
+        Err(EditError::Unknown { what: "body", id })
+    }
+}
+
+fn body_of(world: &World, b: BodyId) -> &Body {
+    world.body(b).expect("body_id checked the body")
+}
+
+fn face_in(world: &World, b: BodyId, id: u64) -> Result<FaceId, EditError> {
+    body_of(world, b)
+        .face_by_serial(Serial(id))
+        .ok_or(EditError::NotInBody {
+            what: "face",
+            id,
+            kind: "face",
+            body: b.get(),
+        })
+}
+
+fn edge_in(world: &World, b: BodyId, id: u64) -> Result<EdgeId, EditError> {
+    body_of(world, b)
+        .edge_by_serial(Serial(id))
+        .ok_or(EditError::NotInBody {
+            what: "edge",
+            id,
+            kind: "edge",
+            body: b.get(),
+        })
+}
+
+fn vertex_in(world: &World, b: BodyId, id: u64) -> Result<VertexId, EditError> {
+    body_of(world, b)
+        .vertex_by_serial(Serial(id))
+        .ok_or(EditError::NotInBody {
+            what: "vertex",
+            id,
+            kind: "vertex",
+            body: b.get(),
+        })
+}
+
+/// The body holding face `id`, wherever it is, and the face.
+fn face_anywhere(world: &World, id: u64) -> Result<(BodyId, FaceId), EditError> {
+    match world.find_entity(Serial(id)) {
+        Some((b, Entity::Face(f))) => Ok((b, f)),
+        _ => Err(EditError::Unknown { what: "face", id }),
+    }
+}
+
+fn finite3(what: &str, v: [f64; 3]) -> Result<DVec3, EditError> {
+    let p = DVec3::from_array(v);
+    if p.is_finite() {
+        Ok(p)
+    } else {
+        Err(EditError::BadNumber(format!("{what} is not finite")))
+    }
+}
+
+fn check_faces(faces: usize) -> Result<(), EditError> {
+    if faces > MAX_BODY_FACES {
+        Err(EditError::TooLarge {
+            faces,
+            max: MAX_BODY_FACES,
+        })
+    } else {
+        Ok(())
+    }
+}
+
+/// An upper bound on the faces a shape makes, checked before anything is built.
+fn shape_faces(shape: &Shape) -> usize {
+    let (s, r) = match *shape {
+        Shape::Cylinder { segments, .. } | Shape::Cone { segments, .. } => (segments as usize, 1),
+        Shape::Sphere {
+            segments, rings, ..
+        }
+        | Shape::Torus {
+            segments, rings, ..
+        } => (segments as usize, rings as usize),
+        Shape::Polyhedron { ref faces, .. } => (faces.len(), 1),
+        Shape::Prism { ref polygon, .. } | Shape::Pyramid { ref polygon, .. } => (polygon.len(), 1),
+        _ => (1, 1),
+    };
+    s.saturating_mul(r).saturating_add(2)
+}
+
+/// Builds the body for `shape` with the world's serials.
+fn build(shape: &Shape, s: &mut crate::model::Serials) -> Result<Body, EditError> {
+    Ok(match shape {
+        Shape::Box { size } => box_solid(s, DVec3::from_array(*size))?,
+        Shape::Tetrahedron { radius } => {
+            if !(radius.is_finite() && *radius > 0.0) {
+                return Err(EditError::BadNumber(format!(
+                    "tetrahedron radius {radius} must be a positive number"
+                )));
+            }
+            mktetra(s, *radius)?
+        }
+        Shape::Prism { polygon, height } => prism_solid(s, &points2(polygon), *height)?,
+        Shape::Pyramid { polygon, height } => pyramid_solid(s, &points2(polygon), *height)?,
+        Shape::Cylinder {
+            radius,
+            height,
+            segments,
+        } => cylinder(s, *radius, *height, *segments as usize)?,
+        Shape::Cone {
+            radius,
+            height,
+            segments,
+        } => cone(s, *radius, *height, *segments as usize)?,
+        Shape::Sphere {
+            radius,
+            segments,
+            rings,
+        } => sphere(s, *radius, *segments as usize, *rings as usize)?,
+        Shape::Torus {
+            major_radius,
+            minor_radius,
+            segments,
+            rings,
+        } => torus(
+            s,
+            *major_radius,
+            *minor_radius,
+            *segments as usize,
+            *rings as usize,
+        )?,
+        Shape::Polyhedron { vertices, faces } => {
+            let pos: Vec<DVec3> = vertices.iter().map(|&v| DVec3::from_array(v)).collect();
+            Body::from_polygons(s, &pos, faces)?
+        }
+        Shape::Seminal { position } => Body::seminal(s, finite3("position", *position)?).0,
+    })
+}
+
+fn counts(outcome: &mut Outcome, b: &Body) {
+    outcome.faces = Some(b.face_count());
+    outcome.edges_count = Some(b.edge_count());
+    outcome.vertices = Some(b.vertex_count());
+}
+
+/// Applies `edit` to `world`. On refusal the world is unchanged.
+pub fn apply(world: &mut World, edit: &Edit) -> Result<Outcome, EditError> {
+    match edit {
+        Edit::CreateBody(req) => create(world, req),
+        Edit::PatchBody { body, patch } => {
+            let b = body_id(world, *body)?;
+            patch_body(world, b, patch)?;
+            Ok(Outcome {
+                id: Some(*body),
+                ..Outcome::default()
+            })
+        }
+        Edit::DeleteBody { body } => {
+            let b = body_id(world, *body)?;
+            let killed = world.kill(b)?;
+            Ok(Outcome {
+                killed: killed.ids().map(|b| b.get()).collect(),
+                ..Outcome::default()
+            })
+        }
+        Edit::Euler { body, op } => {
+            let b = body_id(world, *body)?;
+            euler(world, b, op)
+        }
+        Edit::Transform { body, req } => {
+            let b = body_id(world, *body)?;
+            transform(world, b, req)?;
+            Ok(Outcome {
+                id: Some(*body),
+                ..Outcome::default()
+            })
+        }
+        Edit::Sweep { body, req } => {
+            let b = body_id(world, *body)?;
+            sweep(world, b, req)
+        }
+        Edit::Dual { body } => {
+            let b = body_id(world, *body)?;
+            world.edit(b, |body, _| body.fvdual())?;
+            let mut o = Outcome {
+                id: Some(*body),
+                ..Outcome::default()
+            };
+            counts(&mut o, body_of(world, b));
+            Ok(o)
+        }
+        Edit::Evert { body } => {
+            let b = body_id(world, *body)?;
+            world.edit(b, |body, _| {
+                body.evert();
+                Ok::<_, WorldError>(())
+            })?;
+            Ok(Outcome {
+                id: Some(*body),
+                ..Outcome::default()
+            })
+        }
+        Edit::Copy { body, name } => {
+            let b = body_id(world, *body)?;
+            let node = world.node(b).expect("checked");
+            let (supart, pose, original) = (node.supart, node.pose, node.body.clone());
+            let id = world.insert_with(name.as_deref(), supart, pose, |s| {
+                Ok::<_, WorldError>(original.mkcopy(s))
+            })?;
+            let mut o = Outcome {
+                id: Some(id.get()),
+                ..Outcome::default()
+            };
+            counts(&mut o, body_of(world, id));
+            Ok(o)
+        }
+        Edit::PutCamera { name, camera } => {
+            let c = camera.to_camera()?;
+            world.set_camera(name, c)?;
+            Ok(Outcome::default())
+        }
+        Edit::DeleteCamera { name } => {
+            world.remove_camera(name)?;
+            Ok(Outcome::default())
+        }
+        Edit::PutLight { name, light } => {
+            let l = light.to_light()?;
+            world.set_light(name, l)?;
+            Ok(Outcome::default())
+        }
+        Edit::DeleteLight { name } => {
+            world.remove_light(name)?;
+            Ok(Outcome::default())
+        }
+    }
+}
+
+fn create(world: &mut World, req: &CreateBody) -> Result<Outcome, EditError> {
+    check_faces(shape_faces(&req.shape))?;
+    let parent = match req.parent {
+        Some(p) => body_id(world, p)?,
+        None => world.root(),
+    };
+    let pose = req.pose.map_or(Pose::IDENTITY, |p| p.to_pose());
+    let shape = &req.shape;
+    // `insert_with` speaks `WorldError`; a shape's own error is kept aside here.
+    let mut refused: Option<EditError> = None;
+    let id = world.insert_with(req.name.as_deref(), parent, pose, |s| {
+        build(shape, s).map_err(|e| {
+            refused = Some(e);
+            WorldError::NonFinite { what: "shape" }
+        })
+    });
+    let id = match id {
+        Ok(id) => id,
+        Err(e) => return Err(refused.take().unwrap_or(e.into())),
+    };
+    let body = body_of(world, id);
+    let mut o = Outcome {
+        id: Some(id.get()),
+        ..Outcome::default()
+    };
+    counts(&mut o, body);
+    if matches!(shape, Shape::Seminal { .. }) {
+        o.face = body.faces().next().map(|f| body.face_serial(f).get());
+        o.vertex = body.vertices().next().map(|v| body.vertex_serial(v).get());
+    }
+    Ok(o)
+}
+
+fn patch_body(world: &mut World, b: BodyId, patch: &PatchBody) -> Result<(), EditError> {
+    // Check everything first so that a refused patch changes nothing.
+    let parent = patch.parent.map(|p| body_id(world, p)).transpose()?;
+    let pose = patch
+        .pose
+        .map(|p| p.to_pose().validated())
+        .transpose()
+        .map_err(WorldError::from)?;
+    let mut trial = world.clone();
+    if let Some(name) = &patch.name {
+        trial.rename(b, name.as_deref())?;
+    }
+    if let Some(parent) = parent {
+        trial.attach(b, parent)?;
+    }
+    if let Some(pose) = pose {
+        trial.set_pose(b, pose)?;
+    }
+    *world = trial;
+    Ok(())
+}
+
+fn euler(world: &mut World, b: BodyId, op: &EulerOp) -> Result<Outcome, EditError> {
+    let sv = |body: &Body, v: VertexId| body.vertex_serial(v).get();
+    let se = |body: &Body, e: EdgeId| body.edge_serial(e).get();
+    let sf = |body: &Body, f: FaceId| body.face_serial(f).get();
+    let mut o = Outcome {
+        id: Some(b.get()),
+        ..Outcome::default()
+    };
+    match *op {
+        EulerOp::Mkev {
+            face,
+            vertex,
+            position,
+        } => {
+            let (f, v) = (face_in(world, b, face)?, vertex_in(world, b, vertex)?);
+            let pos = match position {
+                Some(p) => finite3("position", p)?,
+                None => body_of(world, b).position(v),
+            };
+            let (e, vnew) = world.edit(b, |body, s| body.mkev(s, f, v, pos))?;
+            let body = body_of(world, b);
+            o.edge = Some(se(body, e));
+            o.vertex = Some(sv(body, vnew));
+        }
+        EulerOp::Mkfe { v1, face, v2 } => {
+            let f = face_in(world, b, face)?;
+            let (a, c) = (vertex_in(world, b, v1)?, vertex_in(world, b, v2)?);
+            let (e, fnew) = world.edit(b, |body, s| body.mkfe(s, a, f, c))?;
+            let body = body_of(world, b);
+            o.edge = Some(se(body, e));
+            o.face = Some(sf(body, fnew));
+        }
+        EulerOp::Esplit { edge, position } => {
+            let e = edge_in(world, b, edge)?;
+            let pos = match position {
+                Some(p) => finite3("position", p)?,
+                None => {
+                    let body = body_of(world, b);
+                    let r = body.edge(e);
+                    body.position(r.nvt()).lerp(body.position(r.pvt()), 0.5)
+                }
+            };
+            let (enew, vnew) = world.edit(b, |body, s| body.esplit(s, e, pos))?;
+            let body = body_of(world, b);
+            o.edge = Some(se(body, enew));
+            o.vertex = Some(sv(body, vnew));
+        }
+        EulerOp::Klfe { edge } => {
+            let e = edge_in(world, b, edge)?;
+            let f = world.edit(b, |body, _| body.klfe(e))?;
+            o.face = Some(sf(body_of(world, b), f));
+        }
+        EulerOp::Klev { vertex } => {
+            let v = vertex_in(world, b, vertex)?;
+            let keep = world.edit(b, |body, _| body.klev(v))?;
+            o.vertex = Some(sv(body_of(world, b), keep));
+        }
+        EulerOp::Klve { edge } => {
+            let e = edge_in(world, b, edge)?;
+            let keep = world.edit(b, |body, _| body.klve(e))?;
+            o.vertex = Some(sv(body_of(world, b), keep));
+        }
+        EulerOp::Invert { edge } => {
+            let e = edge_in(world, b, edge)?;
+            world.edit(b, |body, _| {
+                body.invert(e);
+                Ok::<_, WorldError>(())
+            })?;
+            o.edge = Some(edge);
+        }
+        EulerOp::Glue {
+            face1,
+            face2,
+            vertex1,
+            vertex2,
+        } => {
+            let f1 = face_in(world, b, face1)?;
+            let (b2, f2) = face_anywhere(world, face2)?;
+            let v1 = match vertex1 {
+                Some(v) => vertex_in(world, b, v)?,
+                None => {
+                    let body = body_of(world, b);
+                    body.face_vertices(f1)
+                        .next()
+                        .ok_or(EulerError::FaceTooSmall {
+                            face: body.face_serial(f1),
+                            degree: 0,
+                        })?
+                }
+            };
+            let v2 = match vertex2 {
+                Some(v) => vertex_in(world, b2, v)?,
+                None => nearest_vertex(world, b, v1, b2, f2)?,
+            };
+            world.glue(b, f1, v1, b2, f2, v2)?;
+        }
+        EulerOp::Gluee {
+            face1,
+            vertex1,
+            face2,
+            vertex2,
+        } => {
+            let (f1, v1) = (face_in(world, b, face1)?, vertex_in(world, b, vertex1)?);
+            let (b2, f2) = face_anywhere(world, face2)?;
+            let v2 = vertex_in(world, b2, vertex2)?;
+            let e = world.gluee(b, f1, v1, b2, f2, v2)?;
+            o.edge = Some(se(body_of(world, b), e));
+        }
+        EulerOp::Glueff { face1, face2 } => {
+            let f1 = face_in(world, b, face1)?;
+            let (b2, f2) = face_anywhere(world, face2)?;
+            let made = world.glueff(b, f1, b2, f2)?;
+            let body = body_of(world, b);
+            o.new_edges = made.iter().map(|&e| se(body, e)).collect();
+        }
+        EulerOp::Unglue { ref edges } => {
+            let seam = edges
+                .iter()
+                .map(|&e| edge_in(world, b, e))
+                .collect::<Result<Vec<_>, _>>()?;
+            let cut = world.unglue(b, &seam)?;
+            o.face = Some(sf(body_of(world, b), cut.kept_face));
+            let holder = cut.split_off.unwrap_or(b);
+            o.new_face = Some(sf(body_of(world, holder), cut.new_face));
+            o.split_off = cut.split_off.map(|s| s.get());
+        }
+    }
+    counts(&mut o, body_of(world, b));
+    Ok(o)
+}
+
+/// The vertex of face `f2` (body `b2`) nearest, in the world, to vertex `v1` of body `b`.
+fn nearest_vertex(
+    world: &World,
+    b: BodyId,
+    v1: VertexId,
+    b2: BodyId,
+    f2: FaceId,
+) -> Result<VertexId, EditError> {
+    let p1 = world.world_position(b, v1).expect("checked vertex");
+    let body2 = body_of(world, b2);
+    body2
+        .face_vertices(f2)
+        .min_by(|&x, &y| {
+            let dx = world
+                .world_position(b2, x)
+                .map_or(f64::INFINITY, |p| p.distance(p1));
+            let dy = world
+                .world_position(b2, y)
+                .map_or(f64::INFINITY, |p| p.distance(p1));
+            dx.total_cmp(&dy)
+        })
+        .ok_or_else(|| {
+            EulerError::FaceTooSmall {
+                face: body2.face_serial(f2),
+                degree: 0,
+            }
+            .into()
+        })
+}
+
+fn transform(world: &mut World, b: BodyId, req: &TransformReq) -> Result<(), EditError> {
+    let t = match req.op {
+        TransformOp::Translate { vector } => Transform::Translate(finite3("vector", vector)?),
+        TransformOp::Rotate {
+            axis,
+            angle_deg,
+            center,
+        } => Transform::Rotate {
+            axis: finite3("axis", axis)?,
+            angle_rad: angle_deg.to_radians(),
+            center: finite3("center", center)?,
+        },
+        TransformOp::Dilate { factor, center } => Transform::Dilate {
+            factor,
+            center: finite3("center", center)?,
+        },
+        TransformOp::Reflect { normal, point } => Transform::Reflect {
+            normal: finite3("normal", normal)?,
+            point: finite3("point", point)?,
+        },
+    };
+    let frame = match req.frame {
+        FrameDto::World => Frame::World,
+        FrameDto::Body => Frame::Body,
+    };
+    let what = match req.target {
+        None => Entity::Body,
+        Some(id) => match world.find_entity(Serial(id)) {
+            Some((owner, e)) if owner == b && e != Entity::Body => e,
+            _ => {
+                return Err(EditError::NotInBody {
+                    what: "target",
+                    id,
+                    kind: "face, edge or vertex",
+                    body: b.get(),
+                });
+            }
+        },
+    };
+    world.transform(b, what, &t, frame)?;
+    Ok(())
+}
+
+fn sweep(world: &mut World, b: BodyId, req: &SweepReq) -> Result<Outcome, EditError> {
+    let f = face_in(world, b, req.face)?;
+    let body = body_of(world, b);
+    let plane = body.face_plane(f).ok_or(SolidError::DegenerateFace {
+        face: body.face_serial(f),
+    })?;
+    let center = body.face_center(f);
+    let distance = req.distance.unwrap_or(1.0);
+    if !distance.is_finite() {
+        return Err(EditError::BadNumber("distance is not finite".into()));
+    }
+    let scale = req.scale.unwrap_or(1.0);
+    let cap = match req.kind {
+        SweepKind::Pyramid => {
+            let peak = match req.peak {
+                Some(p) => finite3("peak", p)?,
+                None => center + plane.normal * distance,
+            };
+            world.edit(b, |body, s| body.pyramid(s, f, peak).map(|_| f))?
+        }
+        kind => {
+            let offset = match req.offset {
+                Some(o) => finite3("offset", o)?,
+                None => plane.normal * distance,
+            };
+            world.edit(b, |body, s| match kind {
+                SweepKind::Prism => body.prism(s, f, offset, scale).map(|w| w.cap),
+                SweepKind::CwPrismoid => {
+                    body.prismoid(s, f, offset, scale, Twist::Cw).map(|w| w.cap)
+                }
+                _ => body
+                    .prismoid(s, f, offset, scale, Twist::Ccw)
+                    .map(|w| w.cap),
+            })?
+        }
+    };
+    let body = body_of(world, b);
+    let mut o = Outcome {
+        id: Some(b.get()),
+        face: Some(body.face_serial(cap).get()),
+        ..Outcome::default()
+    };
+    counts(&mut o, body);
+    Ok(o)
+}

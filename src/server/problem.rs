@@ -1,0 +1,174 @@
+//! Errors as RFC 9457 problem details (`application/problem+json`).
+
+use axum::Json;
+use axum::extract::rejection::{JsonRejection, PathRejection, QueryRejection};
+use axum::http::{HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde::Serialize;
+
+use super::edit::EditError;
+use crate::model::WorldError;
+
+/// A problem answer: HTTP status, a stable type slug, a title and a detail.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    /// HTTP status.
+    pub status: StatusCode,
+    /// Short machine-readable kind, shown as `type` `urn:winged:problem:<kind>`.
+    pub kind: &'static str,
+    /// Human-readable summary of the kind.
+    pub title: &'static str,
+    /// What exactly went wrong.
+    pub detail: String,
+}
+
+#[derive(Serialize)]
+struct Body<'a> {
+    #[serde(rename = "type")]
+    kind: String,
+    title: &'a str,
+    status: u16,
+    detail: &'a str,
+}
+
+impl Problem {
+    /// A problem of the given status and kind.
+    pub fn new(
+        status: StatusCode,
+        kind: &'static str,
+        title: &'static str,
+        detail: impl Into<String>,
+    ) -> Self {
+        Problem {
+            status,
+            kind,
+            title,
+            detail: detail.into(),
+        }
+    }
+
+    /// 400: the request is not well-formed.
+    pub fn bad_request(detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::BAD_REQUEST,
+            "bad-request",
+            "Bad request",
+            detail,
+        )
+    }
+
+    /// 404: no such resource.
+    pub fn not_found(detail: impl Into<String>) -> Self {
+        Self::new(StatusCode::NOT_FOUND, "not-found", "Not found", detail)
+    }
+
+    /// 503: the world's owner is gone (shutting down).
+    pub fn unavailable() -> Self {
+        Self::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            "unavailable",
+            "Service unavailable",
+            "the world is shutting down",
+        )
+    }
+}
+
+impl IntoResponse for Problem {
+    fn into_response(self) -> Response {
+        let body = Body {
+            kind: format!("urn:winged:problem:{}", self.kind),
+            title: self.title,
+            status: self.status.as_u16(),
+            detail: &self.detail,
+        };
+        let mut res = (self.status, Json(body)).into_response();
+        res.headers_mut().insert(
+            header::CONTENT_TYPE,
+            HeaderValue::from_static("application/problem+json"),
+        );
+        res
+    }
+}
+
+impl From<JsonRejection> for Problem {
+    fn from(r: JsonRejection) -> Self {
+        match r {
+            JsonRejection::BytesRejection(_) if r.status() == StatusCode::PAYLOAD_TOO_LARGE => {
+                Problem::new(
+                    StatusCode::PAYLOAD_TOO_LARGE,
+                    "too-large",
+                    "Request body too large",
+                    r.body_text(),
+                )
+            }
+            JsonRejection::MissingJsonContentType(_) => Problem::new(
+                StatusCode::UNSUPPORTED_MEDIA_TYPE,
+                "unsupported-media-type",
+                "Unsupported media type",
+                "send the body as JSON with Content-Type: application/json",
+            ),
+            _ => Problem::bad_request(r.body_text()),
+        }
+    }
+}
+
+impl From<PathRejection> for Problem {
+    fn from(r: PathRejection) -> Self {
+        Problem::bad_request(r.body_text())
+    }
+}
+
+impl From<QueryRejection> for Problem {
+    fn from(r: QueryRejection) -> Self {
+        Problem::bad_request(r.body_text())
+    }
+}
+
+impl From<EditError> for Problem {
+    fn from(e: EditError) -> Self {
+        let detail = e.to_string();
+        match e {
+            EditError::World(w) => world_problem(w, detail),
+            EditError::Unknown { .. } | EditError::NotInBody { .. } => Problem::not_found(detail),
+            EditError::TooLarge { .. } => Problem::new(
+                StatusCode::PAYLOAD_TOO_LARGE,
+                "too-large",
+                "Body too large",
+                detail,
+            ),
+            EditError::Solid(_) => unprocessable("invalid-solid", "Invalid solid", detail),
+            EditError::Camera(_) => unprocessable("invalid-camera", "Invalid camera", detail),
+            EditError::Light(_) => unprocessable("invalid-light", "Invalid light", detail),
+            EditError::BadNumber(_) => Problem::bad_request(detail),
+        }
+    }
+}
+
+fn unprocessable(kind: &'static str, title: &'static str, detail: String) -> Problem {
+    Problem::new(StatusCode::UNPROCESSABLE_ENTITY, kind, title, detail)
+}
+
+fn world_problem(w: WorldError, detail: String) -> Problem {
+    match w {
+        WorldError::UnknownBody(_)
+        | WorldError::UnknownEntity(_)
+        | WorldError::UnknownCamera(_)
+        | WorldError::UnknownLight(_) => Problem::not_found(detail),
+        WorldError::Euler(_) => unprocessable("euler-refused", "Euler operator refused", detail),
+        WorldError::Transform(_) => unprocessable("invalid-transform", "Invalid transform", detail),
+        WorldError::Build(_) | WorldError::Solid(_) | WorldError::InvalidBody(_) => {
+            unprocessable("invalid-solid", "Invalid solid", detail)
+        }
+        WorldError::Camera(_) => unprocessable("invalid-camera", "Invalid camera", detail),
+        WorldError::Light(_) => unprocessable("invalid-light", "Invalid light", detail),
+        WorldError::DuplicateName { .. } => {
+            Problem::new(StatusCode::CONFLICT, "name-taken", "Name taken", detail)
+        }
+        WorldError::Cycle { .. } | WorldError::Root { .. } => {
+            unprocessable("invalid-parts-tree", "Invalid parts-tree change", detail)
+        }
+        WorldError::BadName { .. } | WorldError::Pose(_) | WorldError::NonFinite { .. } => {
+            Problem::bad_request(detail)
+        }
+    }
+}
