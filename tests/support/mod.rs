@@ -1,0 +1,234 @@
+//! A real server on an ephemeral loopback port, and a real HTTP client, for the HTTP
+//! tests.
+
+#![allow(dead_code)]
+
+use std::net::SocketAddr;
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+
+use serde_json::Value;
+use winged::model::World;
+
+/// A running server; stopped (gracefully) when dropped.
+pub struct TestServer {
+    pub base: String,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    thread: Option<JoinHandle<()>>,
+    agent: ureq::Agent,
+}
+
+impl TestServer {
+    /// Serves an empty world.
+    pub fn start() -> Self {
+        Self::with_world(World::new())
+    }
+
+    /// Serves `world` on 127.0.0.1 with an ephemeral port.
+    pub fn with_world(world: World) -> Self {
+        let (addr_tx, addr_rx) = mpsc::channel::<SocketAddr>();
+        let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+        let thread = std::thread::spawn(move || {
+            let rt = tokio::runtime::Builder::new_multi_thread()
+                .worker_threads(2)
+                .enable_all()
+                .build()
+                .expect("a tokio runtime");
+            rt.block_on(async move {
+                winged::server::serve(
+                    "127.0.0.1:0".parse().unwrap(),
+                    world,
+                    move |a| {
+                        let _ = addr_tx.send(a);
+                    },
+                    async move {
+                        let _ = stop_rx.await;
+                    },
+                )
+                .await
+                .expect("the server runs");
+            });
+        });
+        let addr = addr_rx.recv().expect("the server binds");
+        let agent: ureq::Agent = ureq::Agent::config_builder()
+            .http_status_as_error(false)
+            .build()
+            .into();
+        TestServer {
+            base: format!("http://{addr}"),
+            stop: Some(stop_tx),
+            thread: Some(thread),
+            agent,
+        }
+    }
+
+    pub fn url(&self, path: &str) -> String {
+        format!("{}{}", self.base, path)
+    }
+
+    pub fn get(&self, path: &str) -> Reply {
+        Reply::from(self.agent.get(&self.url(path)).call())
+    }
+
+    pub fn delete(&self, path: &str) -> Reply {
+        Reply::from(self.agent.delete(&self.url(path)).call())
+    }
+
+    pub fn post(&self, path: &str, body: &Value) -> Reply {
+        Reply::from(self.agent.post(&self.url(path)).send_json(body))
+    }
+
+    pub fn put(&self, path: &str, body: &Value) -> Reply {
+        Reply::from(self.agent.put(&self.url(path)).send_json(body))
+    }
+
+    pub fn patch(&self, path: &str, body: &Value) -> Reply {
+        Reply::from(self.agent.patch(&self.url(path)).send_json(body))
+    }
+
+    /// POSTs raw bytes with a content type.
+    pub fn post_raw(&self, path: &str, content_type: &str, body: &[u8]) -> Reply {
+        Reply::from(
+            self.agent
+                .post(&self.url(path))
+                .header("content-type", content_type)
+                .send(body),
+        )
+    }
+
+    pub fn agent(&self) -> ureq::Agent {
+        self.agent.clone()
+    }
+}
+
+impl Drop for TestServer {
+    fn drop(&mut self) {
+        if let Some(stop) = self.stop.take() {
+            let _ = stop.send(());
+        }
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// An answer: status, content type and body (JSON when it parses).
+#[derive(Debug)]
+pub struct Reply {
+    pub status: u16,
+    pub content_type: String,
+    pub text: String,
+}
+
+impl Reply {
+    pub fn json(&self) -> Value {
+        serde_json::from_str(&self.text).unwrap_or_else(|e| panic!("not JSON ({e}): {}", self.text))
+    }
+
+    /// Asserts a 2xx answer and returns its JSON.
+    pub fn ok(&self) -> Value {
+        assert!(
+            (200..300).contains(&self.status),
+            "expected success, got {}: {}",
+            self.status,
+            self.text
+        );
+        self.json()
+    }
+
+    /// Asserts a problem+json answer of `status` and returns it.
+    pub fn problem(&self, status: u16) -> Value {
+        assert_eq!(self.status, status, "{}", self.text);
+        assert_eq!(
+            self.content_type, "application/problem+json",
+            "{}",
+            self.text
+        );
+        let p = self.json();
+        assert_eq!(p["status"], status);
+        assert!(p["type"].as_str().is_some_and(|t| !t.is_empty()));
+        assert!(p["title"].as_str().is_some_and(|t| !t.is_empty()));
+        assert!(p["detail"].as_str().is_some_and(|t| !t.is_empty()));
+        p
+    }
+}
+
+impl From<Result<ureq::http::Response<ureq::Body>, ureq::Error>> for Reply {
+    fn from(r: Result<ureq::http::Response<ureq::Body>, ureq::Error>) -> Self {
+        let mut res = r.expect("the request reaches the server");
+        let status = res.status().as_u16();
+        let content_type = res
+            .headers()
+            .get("content-type")
+            .and_then(|v| v.to_str().ok())
+            .unwrap_or("")
+            .to_string();
+        let text = res
+            .body_mut()
+            .with_config()
+            .limit(512 * 1024 * 1024)
+            .read_to_string()
+            .expect("a body");
+        Reply {
+            status,
+            content_type,
+            text,
+        }
+    }
+}
+
+/// Checks a topology dump's winged-edge invariants: every link names an entity of the
+/// dump, each wing meets its edge, each face's vertex cycle closes, and
+/// F − E + V = 2(1 − H) for the handle count given.
+pub fn check_topology_dump(t: &Value, handles: i64) {
+    use std::collections::{HashMap, HashSet};
+    let vs: HashSet<u64> = t["vertices"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v["id"].as_u64().unwrap())
+        .collect();
+    let fs: HashSet<u64> = t["faces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["id"].as_u64().unwrap())
+        .collect();
+    let edges: HashMap<u64, &Value> = t["edges"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| (e["id"].as_u64().unwrap(), e))
+        .collect();
+    for e in edges.values() {
+        for k in ["nvt", "pvt"] {
+            assert!(vs.contains(&e[k].as_u64().unwrap()), "{k} of {e}");
+        }
+        for k in ["nface", "pface"] {
+            assert!(fs.contains(&e[k].as_u64().unwrap()), "{k} of {e}");
+        }
+        // PCW and NCCW meet the edge at PVT; NCW and PCCW at NVT.
+        for (k, at) in [
+            ("pcw", "pvt"),
+            ("nccw", "pvt"),
+            ("ncw", "nvt"),
+            ("pccw", "nvt"),
+        ] {
+            let w = edges
+                .get(&e[k].as_u64().unwrap())
+                .unwrap_or_else(|| panic!("{k} of {e} is no edge"));
+            let v = &e[at];
+            assert!(
+                w["nvt"] == *v || w["pvt"] == *v,
+                "{k} of {e} misses its {at}"
+            );
+        }
+    }
+    for f in t["faces"].as_array().unwrap() {
+        for v in f["vertices"].as_array().unwrap() {
+            assert!(vs.contains(&v.as_u64().unwrap()));
+        }
+    }
+    let (nf, ne, nv) = (fs.len() as i64, edges.len() as i64, vs.len() as i64);
+    assert_eq!(nf - ne + nv, 2 * (1 - handles), "F−E+V of {nf}/{ne}/{nv}");
+}
