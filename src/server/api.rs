@@ -152,6 +152,7 @@ async fn list_bodies(
 ) -> Answer {
     let Query(q) = q?;
     let w = snapshot(&h).await?;
+    let revision = w.revision();
     let bodies: Vec<BodyDto> = tokio::task::spawn_blocking(move || {
         w.bodies()
             .filter(|(id, _)| *id != w.root())
@@ -169,7 +170,7 @@ async fn list_bodies(
             e.to_string(),
         )
     })?;
-    Ok(Json(json!({ "bodies": bodies })).into_response())
+    Ok(Json(json!({ "bodies": bodies, "revision": revision })).into_response())
 }
 
 async fn get_body(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) -> Answer {
@@ -335,10 +336,19 @@ async fn evert(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) ->
 async fn copy(
     State(h): State<Handle>,
     id: Result<Path<u64>, PathRejection>,
-    req: Option<Json<CopyReq>>,
+    req: axum::body::Bytes,
 ) -> Answer {
     let body = id_of(id)?;
-    let name = req.and_then(|Json(r)| r.name);
+    // The body is optional: an empty one means an unnamed copy.
+    let name = if req.iter().all(u8::is_ascii_whitespace) {
+        None
+    } else {
+        serde_json::from_slice::<CopyReq>(&req)
+            .map_err(|e| {
+                Problem::bad_request(format!("Failed to parse the request body as JSON: {e}"))
+            })?
+            .name
+    };
     write(&h, Edit::Copy { body, name }, StatusCode::CREATED).await
 }
 
