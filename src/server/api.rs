@@ -335,10 +335,10 @@ async fn evert(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) ->
 async fn copy(
     State(h): State<Handle>,
     id: Result<Path<u64>, PathRejection>,
-    req: Option<Json<CopyReq>>,
+    req: Result<Option<Json<CopyReq>>, JsonRejection>,
 ) -> Answer {
     let body = id_of(id)?;
-    let name = req.and_then(|Json(r)| r.name);
+    let name = req?.and_then(|Json(r)| r.name);
     write(&h, Edit::Copy { body, name }, StatusCode::CREATED).await
 }
 
