@@ -333,6 +333,11 @@ fn glue_across_bodies_and_unglue() {
         (Some(10), Some(20), Some(12))
     );
     s.get(&format!("/v1/bodies/{b}")).problem(404);
+    assert_eq!(
+        ids(&glued["killed"]),
+        vec![b],
+        "the absorbed body is reported killed"
+    );
     let body = s.get(&format!("/v1/bodies/{a}")).ok();
     assert!((body["volume"].as_f64().unwrap() - 16.0).abs() < 1e-9);
     // The seam: the edges of the old top face, now shared by the two halves.

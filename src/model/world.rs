@@ -511,6 +511,35 @@ impl World {
         Ok(())
     }
 
+    /// Renames (`Some(None)` removes the name), re-parents and re-poses body `b` in one
+    /// write: either all of the given changes happen, as one revision, or none does.
+    /// The re-parenting happens before the new pose is set, so `pose` is relative to the
+    /// new supart.
+    ///
+    /// Refused as [`World::rename`], [`World::attach`] and [`World::set_pose`] are.
+    pub fn update(
+        &mut self,
+        b: BodyId,
+        name: Option<Option<&str>>,
+        supart: Option<BodyId>,
+        pose: Option<Pose>,
+    ) -> Result<(), WorldError> {
+        let revision = self.revision;
+        let mut trial = self.clone();
+        if let Some(name) = name {
+            trial.rename(b, name)?;
+        }
+        if let Some(supart) = supart {
+            trial.attach(b, supart)?;
+        }
+        if let Some(pose) = pose {
+            trial.set_pose(b, pose)?;
+        }
+        trial.revision = revision + 1;
+        *self = trial;
+        Ok(())
+    }
+
     /// KLBFEV: removes body `b` with all its faces, edges and vertices, and all its
     /// sub-parts at any depth. Their serial numbers are never issued again. Returns what
     /// was removed. Refused for the root or an unknown body.

@@ -336,19 +336,11 @@ async fn evert(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) ->
 async fn copy(
     State(h): State<Handle>,
     id: Result<Path<u64>, PathRejection>,
-    req: axum::body::Bytes,
+    req: Result<Option<Json<CopyReq>>, JsonRejection>,
 ) -> Answer {
     let body = id_of(id)?;
-    // The body is optional: an empty one means an unnamed copy.
-    let name = if req.iter().all(u8::is_ascii_whitespace) {
-        None
-    } else {
-        serde_json::from_slice::<CopyReq>(&req)
-            .map_err(|e| {
-                Problem::bad_request(format!("Failed to parse the request body as JSON: {e}"))
-            })?
-            .name
-    };
+    // The body is optional: none (no Content-Type) means an unnamed copy.
+    let name = req?.and_then(|Json(r)| r.name);
     write(&h, Edit::Copy { body, name }, StatusCode::CREATED).await
 }
 

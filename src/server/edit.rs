@@ -162,7 +162,7 @@ pub enum EditError {
     #[error(transparent)]
     Light(#[from] LightError),
     /// An id that names nothing, or names something of another kind or body.
-    #[error("{what} {id} is not a {kind} of body {body}")]
+    #[error("{id} is not the id of any {kind} in body {body}")]
     NotInBody {
         /// "face", "edge" or "vertex".
         what: &'static str,
@@ -303,9 +303,11 @@ fn build(shape: &Shape, s: &mut crate::model::Serials) -> Result<Body, EditError
         Shape::Box { size } => box_solid(s, DVec3::from_array(*size))?,
         Shape::Tetrahedron { radius } => {
             if !(radius.is_finite() && *radius > 0.0) {
-                return Err(EditError::BadNumber(format!(
-                    "tetrahedron radius {radius} must be a positive number"
-                )));
+                return Err(SolidError::NotPositive {
+                    parameter: "radius",
+                    value: *radius,
+                }
+                .into());
             }
             mktetra(s, *radius)?
         }
@@ -411,6 +413,9 @@ pub fn apply(world: &mut World, edit: &Edit) -> Result<Outcome, EditError> {
         }
         Edit::Copy { body, name } => {
             let b = body_id(world, *body)?;
+            if b == world.root() {
+                return Err(WorldError::Root { what: "copied" }.into());
+            }
             let node = world.node(b).expect("checked");
             let (supart, pose, original) = (node.supart, node.pose, node.body.clone());
             let id = world.insert_with(name.as_deref(), supart, pose, |s| {
@@ -478,24 +483,9 @@ fn create(world: &mut World, req: &CreateBody) -> Result<Outcome, EditError> {
 }
 
 fn patch_body(world: &mut World, b: BodyId, patch: &PatchBody) -> Result<(), EditError> {
-    // Check everything first so that a refused patch changes nothing.
     let parent = patch.parent.map(|p| body_id(world, p)).transpose()?;
-    let pose = patch
-        .pose
-        .map(|p| p.to_pose().validated())
-        .transpose()
-        .map_err(WorldError::from)?;
-    let mut trial = world.clone();
-    if let Some(name) = &patch.name {
-        trial.rename(b, name.as_deref())?;
-    }
-    if let Some(parent) = parent {
-        trial.attach(b, parent)?;
-    }
-    if let Some(pose) = pose {
-        trial.set_pose(b, pose)?;
-    }
-    *world = trial;
+    let name = patch.name.as_ref().map(|n| n.as_deref());
+    world.update(b, name, parent, patch.pose.map(|p| p.to_pose()))?;
     Ok(())
 }
 
@@ -594,6 +584,7 @@ fn euler(world: &mut World, b: BodyId, op: &EulerOp) -> Result<Outcome, EditErro
                 None => nearest_vertex(world, b, v1, b2, f2)?,
             };
             world.glue(b, f1, v1, b2, f2, v2)?;
+            absorbed(&mut o, b, b2);
         }
         EulerOp::Gluee {
             face1,
@@ -606,11 +597,13 @@ fn euler(world: &mut World, b: BodyId, op: &EulerOp) -> Result<Outcome, EditErro
             let v2 = vertex_in(world, b2, vertex2)?;
             let e = world.gluee(b, f1, v1, b2, f2, v2)?;
             o.edge = Some(se(body_of(world, b), e));
+            absorbed(&mut o, b, b2);
         }
         EulerOp::Glueff { face1, face2 } => {
             let f1 = face_in(world, b, face1)?;
             let (b2, f2) = face_anywhere(world, face2)?;
             let made = world.glueff(b, f1, b2, f2)?;
+            absorbed(&mut o, b, b2);
             let body = body_of(world, b);
             o.new_edges = made.iter().map(|&e| se(body, e)).collect();
         }
@@ -628,6 +621,13 @@ fn euler(world: &mut World, b: BodyId, op: &EulerOp) -> Result<Outcome, EditErro
     }
     counts(&mut o, body_of(world, b));
     Ok(o)
+}
+
+/// Notes in `o` that gluing body `b2` into `b` removed `b2` (when they differ).
+fn absorbed(o: &mut Outcome, b: BodyId, b2: BodyId) {
+    if b2 != b {
+        o.killed.push(b2.get());
+    }
 }
 
 /// The vertex of face `f2` (body `b2`) nearest, in the world, to vertex `v1` of body `b`.

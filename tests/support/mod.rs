@@ -86,6 +86,11 @@ impl TestServer {
         Reply::from(self.agent.patch(&self.url(path)).send_json(body))
     }
 
+    /// POSTs nothing: no body, no content type.
+    pub fn post_empty(&self, path: &str) -> Reply {
+        Reply::from(self.agent.post(&self.url(path)).send_empty())
+    }
+
     /// POSTs raw bytes with a content type.
     pub fn post_raw(&self, path: &str, content_type: &str, body: &[u8]) -> Reply {
         Reply::from(

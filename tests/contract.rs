@@ -1,0 +1,1428 @@
+//! The API contract: `proto/openapi.yaml` against the router and the running server.
+//!
+//! - every route in `src/server/api.rs` is an operation of the contract and back;
+//! - the contract is well-formed (references resolve, only supported schema keywords,
+//!   discriminators consistent, path parameters declared);
+//! - `GET /openapi.json` serves the same document as the YAML file;
+//! - a real server on an ephemeral port, driven over HTTP through every operation with
+//!   valid and invalid requests, gives only declared status codes, and every answer's
+//!   body matches the declared media type and schema. Valid requests conform to the
+//!   request schemas; malformed ones the server refuses with 400 are refused by the
+//!   request schemas too. Every write answers the revision after it, and refused writes
+//!   leave the revision as it was.
+
+mod contract_support;
+
+use std::cell::RefCell;
+use std::collections::{BTreeMap, BTreeSet};
+
+use serde_json::{Value, json};
+
+use contract_support::routes::routes;
+use contract_support::schema::Validator;
+use contract_support::server::{Http, Reply, Send, TestServer};
+
+const SPEC_YAML: &str = include_str!("../proto/openapi.yaml");
+const ROUTER_SOURCE: &str = include_str!("../src/server/api.rs");
+const HTTP_METHODS: &[&str] = &[
+    "get", "put", "post", "delete", "options", "head", "patch", "trace",
+];
+
+fn spec() -> Value {
+    serde_norway::from_str(SPEC_YAML).expect("proto/openapi.yaml is YAML")
+}
+
+/// `(METHOD, PATH)` of every operation in the contract.
+fn spec_operations(doc: &Value) -> BTreeSet<(String, String)> {
+    let paths = doc["paths"].as_object().expect("paths is an object");
+    let mut ops = BTreeSet::new();
+    for (path, item) in paths {
+        for method in item.as_object().expect("a path item is an object").keys() {
+            if HTTP_METHODS.contains(&method.as_str()) {
+                ops.insert((method.to_uppercase(), path.clone()));
+            }
+        }
+    }
+    ops
+}
+
+#[test]
+fn every_served_route_is_in_the_contract_and_back() {
+    let served: BTreeSet<(String, String)> = routes(ROUTER_SOURCE)
+        .expect("the router's routes can be read")
+        .into_iter()
+        .collect();
+    assert!(
+        served.len() > 10,
+        "suspiciously few routes read from api.rs: {served:?}"
+    );
+    let declared = spec_operations(&spec());
+    let undeclared: Vec<_> = served.difference(&declared).collect();
+    let unserved: Vec<_> = declared.difference(&served).collect();
+    assert!(
+        undeclared.is_empty() && unserved.is_empty(),
+        "routes served but missing from proto/openapi.yaml: {undeclared:?}\n\
+         operations in proto/openapi.yaml that the router does not serve: {unserved:?}"
+    );
+}
+
+/// Every schema the document uses, with where it is.
+fn schemas_in(doc: &Value) -> Vec<(String, &Value)> {
+    let mut out = Vec::new();
+    if let Some(s) = doc
+        .pointer("/components/schemas")
+        .and_then(Value::as_object)
+    {
+        for (name, schema) in s {
+            out.push((format!("#/components/schemas/{name}"), schema));
+        }
+    }
+    for section in ["responses", "requestBodies"] {
+        if let Some(s) = doc
+            .pointer(&format!("/components/{section}"))
+            .and_then(Value::as_object)
+        {
+            for (name, r) in s {
+                for (mt, m) in r["content"].as_object().into_iter().flatten() {
+                    out.push((
+                        format!("#/components/{section}/{name}/content/{mt}"),
+                        &m["schema"],
+                    ));
+                }
+            }
+        }
+    }
+    if let Some(s) = doc
+        .pointer("/components/parameters")
+        .and_then(Value::as_object)
+    {
+        for (name, p) in s {
+            out.push((format!("#/components/parameters/{name}"), &p["schema"]));
+        }
+    }
+    for (path, item) in doc["paths"].as_object().into_iter().flatten() {
+        for (i, p) in item["parameters"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .enumerate()
+        {
+            if p.get("$ref").is_some() {
+                continue;
+            }
+            out.push((format!("{path} parameter {i}"), &p["schema"]));
+        }
+        for (method, op) in item.as_object().into_iter().flatten() {
+            if !HTTP_METHODS.contains(&method.as_str()) {
+                continue;
+            }
+            let at = format!("{} {path}", method.to_uppercase());
+            for (i, p) in op["parameters"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .enumerate()
+            {
+                if p.get("$ref").is_some() {
+                    continue;
+                }
+                out.push((format!("{at} parameter {i}"), &p["schema"]));
+            }
+            for (mt, m) in op
+                .pointer("/requestBody/content")
+                .and_then(Value::as_object)
+                .into_iter()
+                .flatten()
+            {
+                out.push((format!("{at} request {mt}"), &m["schema"]));
+            }
+            for (code, r) in op["responses"].as_object().into_iter().flatten() {
+                for (mt, m) in r["content"].as_object().into_iter().flatten() {
+                    out.push((format!("{at} {code} {mt}"), &m["schema"]));
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_contract_is_well_formed() {
+    let doc = spec();
+    let v = Validator::new(&doc);
+    let mut problems = Vec::new();
+    if !doc["openapi"]
+        .as_str()
+        .is_some_and(|s| s.starts_with("3.1."))
+    {
+        problems.push("openapi must be 3.1.x".to_string());
+    }
+    for (at, schema) in schemas_in(&doc) {
+        if schema.is_null() {
+            problems.push(format!("{at}: no schema"));
+        }
+        problems.extend(v.schema_problems(schema, &at));
+    }
+    let mut operation_ids = BTreeSet::new();
+    for (path, item) in doc["paths"].as_object().expect("paths") {
+        let in_template: BTreeSet<&str> = path
+            .split('/')
+            .filter_map(|s| s.strip_prefix('{').and_then(|s| s.strip_suffix('}')))
+            .collect();
+        for (method, op) in item.as_object().expect("a path item") {
+            if !HTTP_METHODS.contains(&method.as_str()) {
+                continue;
+            }
+            let at = format!("{} {path}", method.to_uppercase());
+            match op["operationId"].as_str() {
+                Some(id) if operation_ids.insert(id.to_string()) => {}
+                Some(id) => problems.push(format!("{at}: operationId {id} is used twice")),
+                None => problems.push(format!("{at}: no operationId")),
+            }
+            // Path parameters: declared at the path or the operation, each exactly the
+            // template's.
+            let mut declared = BTreeSet::new();
+            for p in item["parameters"]
+                .as_array()
+                .into_iter()
+                .chain(op["parameters"].as_array())
+                .flatten()
+            {
+                let p = match v.deref(p) {
+                    Ok(p) => p,
+                    Err(e) => {
+                        problems.push(format!("{at}: {e}"));
+                        continue;
+                    }
+                };
+                if p["in"] == "path" {
+                    if p["required"] != true {
+                        problems.push(format!("{at}: path parameter {} not required", p["name"]));
+                    }
+                    declared.insert(p["name"].as_str().unwrap_or("").to_string());
+                }
+            }
+            let want: BTreeSet<String> = in_template.iter().map(|s| s.to_string()).collect();
+            if declared != want {
+                problems.push(format!(
+                    "{at}: path parameters declared {declared:?}, template has {want:?}"
+                ));
+            }
+            let responses = op["responses"].as_object();
+            if responses.is_none_or(|r| r.is_empty()) {
+                problems.push(format!("{at}: no responses"));
+            }
+            for (code, r) in responses.into_iter().flatten() {
+                let ok_code = code.len() == 3 && code.parse::<u16>().is_ok_and(|c| c >= 100);
+                if !ok_code {
+                    problems.push(format!("{at}: response {code:?} is not a status code"));
+                    continue;
+                }
+                let r = match v.deref(r) {
+                    Ok(r) => r,
+                    Err(e) => {
+                        problems.push(format!("{at} {code}: {e}"));
+                        continue;
+                    }
+                };
+                if !r["description"].is_string() {
+                    problems.push(format!("{at} {code}: no description"));
+                }
+                let want_media = if code.starts_with('2') {
+                    "application/json"
+                } else {
+                    "application/problem+json"
+                };
+                let media: Vec<&String> = r["content"]
+                    .as_object()
+                    .into_iter()
+                    .flatten()
+                    .map(|(k, _)| k)
+                    .collect();
+                if media != [want_media] {
+                    problems.push(format!(
+                        "{at} {code}: media types {media:?}, want {want_media}"
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        problems.is_empty(),
+        "proto/openapi.yaml:\n{}",
+        problems.join("\n")
+    );
+}
+
+#[test]
+fn the_served_document_is_the_yaml() {
+    let server = TestServer::start(winged::model::World::new());
+    let http = Http::new(&server.base);
+    let r = http.call("GET", "/openapi.json", Send::Nothing);
+    assert_eq!(r.status, 200);
+    assert_eq!(r.media_type, "application/json");
+    assert_eq!(
+        r.json(),
+        spec(),
+        "GET /openapi.json differs from proto/openapi.yaml"
+    );
+}
+
+// ----- the HTTP exchange checked against the contract ------------------------------
+
+/// Whether the request schema should accept a request the server refuses.
+#[derive(Clone, Copy, PartialEq)]
+enum Spec {
+    /// The request schema refuses it too (malformed input).
+    Refuses,
+    /// The request schema cannot tell (a semantic refusal).
+    Either,
+}
+
+struct Contract {
+    doc: Value,
+    http: Http,
+    /// Statuses seen per (METHOD, template).
+    seen: RefCell<BTreeMap<(String, String), BTreeSet<u16>>>,
+}
+
+impl Contract {
+    fn new(base: &str) -> Contract {
+        Contract {
+            doc: spec(),
+            http: Http::new(base),
+            seen: RefCell::new(BTreeMap::new()),
+        }
+    }
+
+    fn v(&self) -> Validator<'_> {
+        Validator::new(&self.doc)
+    }
+
+    fn operation(&self, method: &str, template: &str) -> &Value {
+        let op = &self.doc["paths"][template][method.to_lowercase()];
+        assert!(op.is_object(), "{method} {template} is not in the contract");
+        op
+    }
+
+    fn request_schema(&self, method: &str, template: &str) -> Option<&Value> {
+        let body = self.operation(method, template).get("requestBody")?;
+        let body = self.v().deref(body).expect("requestBody resolves");
+        Some(&body["content"]["application/json"]["schema"])
+    }
+
+    /// Sends the request, checks the answer against the contract, records the status.
+    fn exchange(&self, method: &str, template: &str, path: &str, body: Send) -> Reply {
+        assert!(
+            matches_template(template, path),
+            "{path} is not an instance of {template}"
+        );
+        let op = self.operation(method, template);
+        let reply = self.http.call(method, path, body);
+        let what = format!("{method} {path} answered {}: {}", reply.status, reply.text);
+        let declared = op["responses"]
+            .get(reply.status.to_string())
+            .unwrap_or_else(|| panic!("status {} is not declared: {what}", reply.status));
+        let declared = self.v().deref(declared).expect("the response resolves");
+        match declared.get("content").and_then(Value::as_object) {
+            Some(content) => {
+                let media = content.get(&reply.media_type).unwrap_or_else(|| {
+                    panic!(
+                        "media type {:?} is not declared (declared: {:?}): {what}",
+                        reply.media_type,
+                        content.keys().collect::<Vec<_>>()
+                    )
+                });
+                let body = reply.json();
+                if let Err(e) = self.v().validate(&media["schema"], &body) {
+                    panic!("the answer does not match its schema:\n{e}\n{what}");
+                }
+            }
+            None => assert!(reply.text.is_empty(), "an answer without content: {what}"),
+        }
+        self.seen
+            .borrow_mut()
+            .entry((method.to_string(), template.to_string()))
+            .or_default()
+            .insert(reply.status);
+        reply
+    }
+
+    fn revision(&self) -> u64 {
+        let r = self.exchange("GET", "/healthz", "/healthz", Send::Nothing);
+        r.json()["revision"].as_u64().expect("a revision")
+    }
+
+    /// A valid request: it conforms to the request schema and succeeds; a write
+    /// answers the next revision.
+    fn ok(&self, method: &str, template: &str, path: &str, body: Option<Value>) -> Value {
+        if let (Some(b), Some(schema)) = (&body, self.request_schema(method, template))
+            && let Err(e) = self.v().validate(schema, b)
+        {
+            panic!("{method} {path}: the contract refuses a valid request {b}:\n{e}");
+        }
+        let write = method != "GET";
+        let before = if write { self.revision() } else { 0 };
+        let send = match &body {
+            Some(b) => Send::Json(b),
+            None => Send::Nothing,
+        };
+        let r = self.exchange(method, template, path, send);
+        assert!(
+            (200..300).contains(&r.status),
+            "{method} {path} {}: {}",
+            body.map(|b| b.to_string()).unwrap_or_default(),
+            r.text
+        );
+        let v = r.json();
+        if write {
+            let answered = v["revision"].as_u64().expect("a write answers a revision");
+            assert_eq!(
+                answered,
+                self.revision(),
+                "{method} {path}: a write answers the revision after it: {v}"
+            );
+            // One write, one revision. PATCH is the exception for now: it advances the
+            // revision once per field it changes (none for `{}`).
+            if method == "PATCH" {
+                assert!(answered >= before, "{method} {path}: {v}");
+            } else {
+                assert_eq!(
+                    answered,
+                    before + 1,
+                    "{method} {path}: one write, one revision: {v}"
+                );
+            }
+        }
+        v
+    }
+
+    /// A refused request: the status is `status`, the answer is a problem, and the
+    /// world's revision is unchanged. With [`Spec::Refuses`] the request schema must
+    /// refuse the body too.
+    fn refused(
+        &self,
+        method: &str,
+        template: &str,
+        path: &str,
+        body: Send,
+        status: u16,
+        spec: Spec,
+    ) -> Value {
+        if let (Send::Json(b), Some(schema), Spec::Refuses) =
+            (&body, self.request_schema(method, template), spec)
+        {
+            assert!(
+                self.v().validate(schema, b).is_err(),
+                "{method} {path}: the contract accepts {b}, which the server refuses"
+            );
+        }
+        let before = self.revision();
+        let r = self.exchange(method, template, path, body);
+        assert_eq!(r.status, status, "{method} {path}: {}", r.text);
+        assert_eq!(r.media_type, "application/problem+json", "{method} {path}");
+        assert_eq!(self.revision(), before, "{method} {path} changed the world");
+        r.json()
+    }
+
+    fn refused_json(
+        &self,
+        method: &str,
+        template: &str,
+        path: &str,
+        body: Value,
+        status: u16,
+        spec: Spec,
+    ) -> Value {
+        self.refused(method, template, path, Send::Json(&body), status, spec)
+    }
+
+    fn topology(&self, id: u64) -> Value {
+        let p = format!("/v1/bodies/{id}/topology");
+        self.ok("GET", "/v1/bodies/{id}/topology", &p, None)
+    }
+
+    fn create(&self, req: Value) -> Value {
+        let v = self.ok("POST", "/v1/bodies", "/v1/bodies", Some(req));
+        assert!(v["id"].is_u64(), "{v}");
+        v
+    }
+
+    fn euler(&self, body: u64, op: Value) -> Value {
+        let p = format!("/v1/bodies/{body}/euler");
+        self.ok("POST", "/v1/bodies/{id}/euler", &p, Some(op))
+    }
+}
+
+fn matches_template(template: &str, path: &str) -> bool {
+    let path = path.split('?').next().unwrap_or("");
+    let (t, p): (Vec<_>, Vec<_>) = (template.split('/').collect(), path.split('/').collect());
+    t.len() == p.len()
+        && t.iter()
+            .zip(&p)
+            .all(|(t, p)| t == p || (t.starts_with('{') && t.ends_with('}') && !p.is_empty()))
+}
+
+fn id(v: &Value) -> u64 {
+    v.as_u64().unwrap_or_else(|| panic!("not an id: {v}"))
+}
+
+fn ids(v: &Value) -> Vec<u64> {
+    v.as_array().expect("an array").iter().map(id).collect()
+}
+
+/// A face of topology `t` whose outward normal is closest to `n`.
+fn face_facing(t: &Value, n: [f64; 3]) -> &Value {
+    t["faces"]
+        .as_array()
+        .expect("faces")
+        .iter()
+        .max_by(|a, b| {
+            let dot = |f: &Value| {
+                (0..3)
+                    .map(|i| f["plane"][i].as_f64().unwrap_or(0.0) * n[i])
+                    .sum::<f64>()
+            };
+            dot(a).total_cmp(&dot(b))
+        })
+        .expect("a face")
+}
+
+/// The edges of face `f` in topology `t`.
+fn edges_of(t: &Value, f: u64) -> Vec<u64> {
+    t["edges"]
+        .as_array()
+        .expect("edges")
+        .iter()
+        .filter(|e| e["nface"] == f || e["pface"] == f)
+        .map(|e| id(&e["id"]))
+        .collect()
+}
+
+#[test]
+fn answers_match_the_contract() {
+    let world = winged::server::demo::demo_world().expect("the demo world builds");
+    let server = TestServer::start(world);
+    let c = Contract::new(&server.base);
+
+    service_and_reads(&c);
+    create_bodies(&c);
+    patch_bodies(&c);
+    euler_operators(&c);
+    transforms(&c);
+    sweeps_duals_everts_copies(&c);
+    cameras(&c);
+    lights(&c);
+    deletes(&c);
+    unknown_route(&c);
+
+    let seen = c.seen.borrow();
+    let declared = spec_operations(&c.doc);
+    let untried: Vec<_> = declared
+        .iter()
+        .filter(|k| {
+            !seen
+                .get(*k)
+                .is_some_and(|s| s.iter().any(|c| (200..300).contains(c)))
+        })
+        .collect();
+    assert!(
+        untried.is_empty(),
+        "operations never exercised with success: {untried:?}"
+    );
+    let all: BTreeSet<u16> = seen.values().flatten().copied().collect();
+    for status in [200, 201, 400, 404, 409, 413, 415, 422] {
+        assert!(all.contains(&status), "no exchange answered {status}");
+    }
+    drop(seen);
+    drop(c);
+    drop(server);
+}
+
+fn service_and_reads(c: &Contract) {
+    let h = c.ok("GET", "/healthz", "/healthz", None);
+    assert_eq!(h["status"], "ok");
+    c.ok("GET", "/openapi.json", "/openapi.json", None);
+    let w = c.ok("GET", "/v1/world", "/v1/world", None);
+    let list = c.ok("GET", "/v1/bodies", "/v1/bodies", None);
+    let bodies = list["bodies"].as_array().expect("bodies");
+    assert_eq!(w["bodies"].as_u64(), Some(bodies.len() as u64), "{w}");
+    assert!(
+        bodies.iter().all(|b| b["id"] != 1),
+        "the world body is not listed"
+    );
+
+    let cube = c.ok("GET", "/v1/bodies", "/v1/bodies?name=cube", None);
+    assert_eq!(cube["bodies"].as_array().map(Vec::len), Some(1), "{cube}");
+    let table = id(&c.ok("GET", "/v1/bodies", "/v1/bodies?name=table", None)["bodies"][0]["id"]);
+    let parts = c.ok(
+        "GET",
+        "/v1/bodies",
+        &format!("/v1/bodies?parent={table}"),
+        None,
+    );
+    assert!(!parts["bodies"].as_array().expect("bodies").is_empty());
+    c.refused(
+        "GET",
+        "/v1/bodies",
+        "/v1/bodies?colour=red",
+        Send::Nothing,
+        400,
+        Spec::Either,
+    );
+    c.refused(
+        "GET",
+        "/v1/bodies",
+        "/v1/bodies?parent=x",
+        Send::Nothing,
+        400,
+        Spec::Either,
+    );
+
+    let t = c.ok(
+        "GET",
+        "/v1/bodies/{id}",
+        &format!("/v1/bodies/{table}"),
+        None,
+    );
+    assert_eq!(t["name"], "table");
+    let root = c.ok("GET", "/v1/bodies/{id}", "/v1/bodies/1", None);
+    assert!(root["bounds"].is_null(), "{root}");
+    c.refused(
+        "GET",
+        "/v1/bodies/{id}",
+        "/v1/bodies/abc",
+        Send::Nothing,
+        400,
+        Spec::Either,
+    );
+    c.refused(
+        "GET",
+        "/v1/bodies/{id}",
+        "/v1/bodies/999999",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+
+    let topo = c.topology(table);
+    assert_eq!(topo["faces"].as_array().map(Vec::len), Some(6));
+    c.topology(1);
+    let tp = "/v1/bodies/{id}/topology";
+    c.refused(
+        "GET",
+        tp,
+        "/v1/bodies/999999/topology",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+    c.refused(
+        "GET",
+        tp,
+        "/v1/bodies/x/topology",
+        Send::Nothing,
+        400,
+        Spec::Either,
+    );
+}
+
+fn create_bodies(c: &Contract) {
+    let square = json!([[0, 0], [1, 0], [1, 1], [0, 1]]);
+    let shapes = [
+        json!({"type": "box", "size": [1, 2, 3]}),
+        json!({"type": "tetrahedron", "radius": 1}),
+        json!({"type": "prism", "polygon": square, "height": 1}),
+        json!({"type": "pyramid", "polygon": square, "height": 0.5}),
+        json!({"type": "cylinder", "radius": 1, "height": 2}),
+        json!({"type": "cylinder", "radius": 1, "height": 2, "segments": 6}),
+        json!({"type": "cone", "radius": 1, "height": 1, "segments": 5}),
+        json!({"type": "sphere", "radius": 1, "segments": 6, "rings": 3}),
+        json!({"type": "torus", "major_radius": 2, "minor_radius": 0.5, "segments": 6, "rings": 4}),
+        json!({"type": "polyhedron",
+               "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+               "faces": [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]}),
+    ];
+    for shape in shapes {
+        let made = c.create(json!({ "shape": shape }));
+        assert!(made.get("face").is_none(), "{made}");
+    }
+    let table = id(&c.ok("GET", "/v1/bodies", "/v1/bodies?name=table", None)["bodies"][0]["id"]);
+    let block = c.create(json!({
+        "name": "block",
+        "parent": table,
+        "pose": {"position": [0, 0, 0.5], "rotation": [0, 0, 0, 1]},
+        "shape": {"type": "box", "size": [0.2, 0.2, 0.2]}
+    }));
+    let b = c.ok(
+        "GET",
+        "/v1/bodies/{id}",
+        &format!("/v1/bodies/{}", id(&block["id"])),
+        None,
+    );
+    assert_eq!(b["parent"].as_u64(), Some(table));
+
+    let seed = c.create(json!({"shape": {"type": "seminal", "position": [1, 2, 3]}}));
+    assert_eq!(
+        (seed["faces"].as_u64(), seed["vertices"].as_u64()),
+        (Some(1), Some(1))
+    );
+    let t = c.topology(id(&seed["id"]));
+    assert!(
+        t["vertices"][0]["ped"].is_null() && t["faces"][0]["plane"].is_null(),
+        "{t}"
+    );
+    assert_eq!(t["faces"][0]["id"], seed["face"]);
+
+    let post = |body: Value, status: u16, spec: Spec| {
+        c.refused_json("POST", "/v1/bodies", "/v1/bodies", body, status, spec)
+    };
+    post(json!({"shape": {"type": "blob"}}), 400, Spec::Refuses);
+    post(json!({"name": "x"}), 400, Spec::Refuses);
+    post(
+        json!({"shape": {"type": "box", "size": [1, 1, 1]}, "colour": "red"}),
+        400,
+        Spec::Refuses,
+    );
+    post(
+        json!({"shape": {"type": "box", "size": [1, 1]}}),
+        400,
+        Spec::Refuses,
+    );
+    post(json!({"shape": {"type": "box"}}), 400, Spec::Refuses);
+    post(
+        json!({"shape": {"type": "seminal"}, "parent": 1.5}),
+        400,
+        Spec::Refuses,
+    );
+    post(
+        json!({"name": " padded", "shape": {"type": "seminal"}}),
+        400,
+        Spec::Either,
+    );
+    post(
+        json!({"shape": {"type": "seminal"}, "pose": {"rotation": [0, 0, 0, 0]}}),
+        400,
+        Spec::Either,
+    );
+    post(
+        json!({"name": "block", "shape": {"type": "seminal"}}),
+        409,
+        Spec::Either,
+    );
+    post(
+        json!({"shape": {"type": "box", "size": [-1, 1, 1]}}),
+        422,
+        Spec::Refuses,
+    );
+    post(
+        json!({"shape": {"type": "torus", "major_radius": 1, "minor_radius": 2}}),
+        422,
+        Spec::Either,
+    );
+    post(
+        json!({"shape": {"type": "polyhedron", "vertices": [[0, 0, 0]], "faces": [[0, 0, 0]]}}),
+        422,
+        Spec::Either,
+    );
+    post(
+        json!({"parent": 999999, "shape": {"type": "seminal"}}),
+        404,
+        Spec::Either,
+    );
+    post(
+        json!({"shape": {"type": "sphere", "radius": 1, "segments": 100000, "rings": 100000}}),
+        413,
+        Spec::Either,
+    );
+    let raw = |ct: Option<&str>, bytes: &[u8], status: u16| {
+        c.refused(
+            "POST",
+            "/v1/bodies",
+            "/v1/bodies",
+            Send::Raw(ct, bytes),
+            status,
+            Spec::Either,
+        )
+    };
+    raw(Some("application/json"), b"{bad", 400);
+    raw(Some("application/json"), b"", 400);
+    raw(Some("text/plain"), br#"{"shape":{"type":"seminal"}}"#, 415);
+    raw(None, br#"{"shape":{"type":"seminal"}}"#, 415);
+}
+
+fn body_named(c: &Contract, name: &str) -> u64 {
+    let l = c.ok(
+        "GET",
+        "/v1/bodies",
+        &format!("/v1/bodies?name={name}"),
+        None,
+    );
+    id(&l["bodies"][0]["id"])
+}
+
+fn patch_bodies(c: &Contract) {
+    let block = body_named(c, "block");
+    let p = format!("/v1/bodies/{block}");
+    let t = "/v1/bodies/{id}";
+    let changed = c.ok("PATCH", t, &p, Some(json!({"name": "brick"})));
+    assert_eq!(changed["id"].as_u64(), Some(block));
+    c.ok("PATCH", t, &p, Some(json!({"name": null})));
+    assert!(c.ok("GET", t, &p, None)["name"].is_null());
+    c.ok(
+        "PATCH",
+        t,
+        &p,
+        Some(json!({"name": "block", "pose": {"position": [0, 0, 1]}})),
+    );
+    let before = c.ok("GET", t, &p, None);
+    assert_eq!(before["pose"]["position"], json!([0.0, 0.0, 1.0]));
+    c.ok("PATCH", t, &p, Some(json!({"parent": 1})));
+    c.ok("PATCH", t, &p, Some(json!({})));
+    let after = c.ok("GET", t, &p, None);
+    assert_eq!(after["parent"], 1);
+    // Re-parenting does not move the body.
+    assert_eq!(after["pose"], before["world_pose"], "{before}\n{after}");
+
+    c.refused_json("PATCH", t, &p, json!({"name": "table"}), 409, Spec::Either);
+    c.refused_json("PATCH", t, &p, json!({"parent": block}), 422, Spec::Either);
+    c.refused_json(
+        "PATCH",
+        t,
+        "/v1/bodies/1",
+        json!({"name": "x"}),
+        422,
+        Spec::Either,
+    );
+    c.refused_json("PATCH", t, &p, json!({"name": ""}), 400, Spec::Refuses);
+    c.refused_json("PATCH", t, &p, json!({"colour": 1}), 400, Spec::Refuses);
+    c.refused_json(
+        "PATCH",
+        t,
+        &p,
+        json!({"pose": {"position": [0, 0]}}),
+        400,
+        Spec::Refuses,
+    );
+    c.refused_json(
+        "PATCH",
+        t,
+        "/v1/bodies/999999",
+        json!({"name": "x"}),
+        404,
+        Spec::Either,
+    );
+    c.refused_json("PATCH", t, &p, json!({"parent": 999999}), 404, Spec::Either);
+    c.refused(
+        "PATCH",
+        t,
+        &p,
+        Send::Raw(Some("text/plain"), b"{}"),
+        415,
+        Spec::Either,
+    );
+}
+
+fn euler_operators(c: &Contract) {
+    let eu = "/v1/bodies/{id}/euler";
+    // ESPLIT and KLEV, MKFE and KLFE, INVERT, KLVE on a box.
+    let b = id(&c.create(json!({"shape": {"type": "box", "size": [2, 2, 2]}}))["id"]);
+    let t = c.topology(b);
+    let f0 = &t["faces"][0];
+    let (f, fv) = (id(&f0["id"]), ids(&f0["vertices"]));
+    let e0 = edges_of(&t, f)[0];
+    let split = c.euler(b, json!({"op": "esplit", "edge": e0}));
+    assert_eq!(
+        (split["edges"].as_u64(), split["vertices"].as_u64()),
+        (Some(13), Some(9))
+    );
+    let back = c.euler(b, json!({"op": "klev", "vertex": split["vertex"]}));
+    assert_eq!(back["edges"].as_u64(), Some(12), "{back}");
+    let cut = c.euler(
+        b,
+        json!({"op": "mkfe", "v1": fv[0], "face": f, "v2": fv[2]}),
+    );
+    assert_eq!(cut["faces"].as_u64(), Some(7), "{cut}");
+    assert!(cut["face"].is_u64() && cut["edge"].is_u64(), "{cut}");
+    let merged = c.euler(b, json!({"op": "klfe", "edge": cut["edge"]}));
+    assert_eq!(merged["faces"].as_u64(), Some(6), "{merged}");
+    let turned = c.euler(b, json!({"op": "invert", "edge": e0}));
+    assert_eq!(turned["edge"].as_u64(), Some(e0));
+    let split = c.euler(
+        b,
+        json!({"op": "esplit", "edge": e0, "position": [1, 1, 1]}),
+    );
+    let contracted = c.euler(b, json!({"op": "klve", "edge": split["edge"]}));
+    assert!(contracted["vertex"].is_u64(), "{contracted}");
+
+    // MKEV from a seminal body.
+    let s = c.create(json!({"shape": {"type": "seminal"}}));
+    let spur = c.euler(
+        id(&s["id"]),
+        json!({"op": "mkev", "face": s["face"], "vertex": s["vertex"], "position": [1, 0, 0]}),
+    );
+    assert_eq!(
+        (spur["edges"].as_u64(), spur["vertices"].as_u64()),
+        (Some(1), Some(2))
+    );
+
+    // GLUE two unit boxes face to face: the second body is merged into the first.
+    let unit = |x: f64| {
+        id(
+            &c.create(json!({"shape": {"type": "box", "size": [1, 1, 1]},
+                             "pose": {"position": [x, 0, 0]}}))["id"],
+        )
+    };
+    let (p, q) = (unit(0.0), unit(1.0));
+    let (fp, fq) = (
+        face_facing(&c.topology(p), [1.0, 0.0, 0.0])["id"].clone(),
+        face_facing(&c.topology(q), [-1.0, 0.0, 0.0])["id"].clone(),
+    );
+    let glued = c.euler(p, json!({"op": "glue", "face1": fp, "face2": fq}));
+    assert_eq!(glued["faces"].as_u64(), Some(10), "{glued}");
+    c.refused(
+        "GET",
+        "/v1/bodies/{id}",
+        &format!("/v1/bodies/{q}"),
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+
+    // GLUEFF: a tube between two boxes apart.
+    let (p, q) = (unit(0.0), unit(3.0));
+    let (fp, fq) = (
+        face_facing(&c.topology(p), [1.0, 0.0, 0.0])["id"].clone(),
+        face_facing(&c.topology(q), [-1.0, 0.0, 0.0])["id"].clone(),
+    );
+    let tube = c.euler(p, json!({"op": "glueff", "face1": fp, "face2": fq}));
+    assert_eq!(
+        tube["new_edges"].as_array().map(Vec::len),
+        Some(4),
+        "{tube}"
+    );
+
+    // GLUEE: a wasp edge between two boxes apart.
+    let (p, q) = (unit(0.0), unit(3.0));
+    let (tp, tq) = (c.topology(p), c.topology(q));
+    let (gp, gq) = (
+        face_facing(&tp, [1.0, 0.0, 0.0]),
+        face_facing(&tq, [-1.0, 0.0, 0.0]),
+    );
+    let wasp = c.euler(
+        p,
+        json!({"op": "gluee", "face1": gp["id"], "vertex1": gp["vertices"][0],
+               "face2": gq["id"], "vertex2": gq["vertices"][0]}),
+    );
+    assert!(wasp["edge"].is_u64(), "{wasp}");
+
+    // UNGLUE round one face: the face comes off as a body of its own.
+    let u = unit(5.0);
+    let t = c.topology(u);
+    let top = id(&face_facing(&t, [0.0, 0.0, 1.0])["id"]);
+    let cut = c.euler(u, json!({"op": "unglue", "edges": edges_of(&t, top)}));
+    assert!(
+        cut["split_off"].is_u64() && cut["new_face"].is_u64(),
+        "{cut}"
+    );
+
+    // Refusals, on a fresh box whose corners all have three edges.
+    let r = unit(8.0);
+    let path = format!("/v1/bodies/{r}/euler");
+    let corner = id(&c.topology(r)["vertices"][0]["id"]);
+    let no = |body: Value, status: u16, spec: Spec| {
+        c.refused_json("POST", eu, &path, body, status, spec)
+    };
+    let refused = no(json!({"op": "klev", "vertex": corner}), 422, Spec::Either);
+    assert_eq!(refused["type"], "urn:winged:problem:euler-refused");
+    no(json!({"op": "unglue", "edges": []}), 422, Spec::Either);
+    no(json!({"op": "twist", "edge": 1}), 400, Spec::Refuses);
+    no(json!({"op": "klfe"}), 400, Spec::Refuses);
+    no(
+        json!({"op": "klfe", "edge": 1, "face": 2}),
+        400,
+        Spec::Refuses,
+    );
+    no(json!({"op": "klfe", "edge": -1}), 400, Spec::Refuses);
+    no(json!({"op": "klfe", "edge": e0}), 404, Spec::Either);
+    c.refused_json(
+        "POST",
+        eu,
+        "/v1/bodies/999999/euler",
+        json!({"op": "klfe", "edge": 1}),
+        404,
+        Spec::Either,
+    );
+    c.refused(
+        "POST",
+        eu,
+        &path,
+        Send::Raw(Some("text/plain"), b"{}"),
+        415,
+        Spec::Either,
+    );
+}
+
+fn transforms(c: &Contract) {
+    let tr = "/v1/bodies/{id}/transform";
+    let b = id(&c.create(json!({"shape": {"type": "box", "size": [1, 1, 1]}}))["id"]);
+    let p = format!("/v1/bodies/{b}/transform");
+    let top = id(&face_facing(&c.topology(b), [0.0, 0.0, 1.0])["id"]);
+    c.ok(
+        "POST",
+        tr,
+        &p,
+        Some(json!({"op": "translate", "vector": [1, 0, 0]})),
+    );
+    // A translation of the body itself changes its pose.
+    let moved = c.ok("GET", "/v1/bodies/{id}", &format!("/v1/bodies/{b}"), None);
+    assert_eq!(
+        moved["world_pose"]["position"],
+        json!([1.0, 0.0, 0.0]),
+        "{moved}"
+    );
+    for req in [
+        json!({"op": "rotate", "axis": [0, 0, 1], "angle_deg": 30, "center": [1, 0, 0], "frame": "body"}),
+        json!({"op": "dilate", "factor": 2, "center": [0, 0, 0], "frame": "world"}),
+        json!({"op": "reflect", "normal": [1, 0, 0], "point": [0.5, 0, 0]}),
+        json!({"op": "translate", "vector": [0, 0, 0.25], "target": top}),
+    ] {
+        let v = c.ok("POST", tr, &p, Some(req));
+        assert_eq!(v["id"].as_u64(), Some(b), "{v}");
+    }
+    let no =
+        |body: Value, status: u16, spec: Spec| c.refused_json("POST", tr, &p, body, status, spec);
+    let bad = no(json!({"op": "dilate", "factor": 0}), 422, Spec::Refuses);
+    assert_eq!(bad["type"], "urn:winged:problem:invalid-transform");
+    no(
+        json!({"op": "shear", "vector": [1, 0, 0]}),
+        400,
+        Spec::Refuses,
+    );
+    no(json!({"op": "translate"}), 400, Spec::Refuses);
+    no(
+        json!({"op": "translate", "vector": [1, 0, 0], "frame": "camera"}),
+        400,
+        Spec::Refuses,
+    );
+    no(
+        json!({"op": "translate", "vector": [1, 0, 0], "target": 1}),
+        404,
+        Spec::Either,
+    );
+    c.refused_json(
+        "POST",
+        tr,
+        "/v1/bodies/999999/transform",
+        json!({"op": "translate", "vector": [1, 0, 0]}),
+        404,
+        Spec::Either,
+    );
+    c.refused(
+        "POST",
+        tr,
+        &p,
+        Send::Raw(Some("text/plain"), b"{}"),
+        415,
+        Spec::Either,
+    );
+}
+
+fn sweeps_duals_everts_copies(c: &Contract) {
+    let square = json!([[0, 0], [1, 0], [1, 1], [0, 1]]);
+    let b =
+        id(&c.create(json!({"shape": {"type": "prism", "polygon": square, "height": 1}}))["id"]);
+    let top = id(&face_facing(&c.topology(b), [0.0, 0.0, 1.0])["id"]);
+    let sw = "/v1/bodies/{id}/sweep";
+    let p = format!("/v1/bodies/{b}/sweep");
+    let s = c.ok(
+        "POST",
+        sw,
+        &p,
+        Some(json!({"face": top, "kind": "prism", "distance": 0.5})),
+    );
+    assert_eq!(
+        (s["face"].as_u64(), s["faces"].as_u64()),
+        (Some(top), Some(10)),
+        "{s}"
+    );
+    c.ok(
+        "POST",
+        sw,
+        &p,
+        Some(json!({"face": top, "kind": "cw_prismoid", "distance": 0.2, "scale": 0.5})),
+    );
+    c.ok(
+        "POST",
+        sw,
+        &p,
+        Some(json!({"face": top, "kind": "ccw_prismoid", "offset": [0, 0, 0.1]})),
+    );
+    c.ok(
+        "POST",
+        sw,
+        &p,
+        Some(json!({"face": top, "kind": "pyramid", "peak": [0.5, 0.5, 3]})),
+    );
+    let no =
+        |body: Value, status: u16, spec: Spec| c.refused_json("POST", sw, &p, body, status, spec);
+    no(json!({"face": top, "kind": "twist"}), 400, Spec::Refuses);
+    no(json!({"kind": "prism"}), 400, Spec::Refuses);
+    no(
+        json!({"face": top, "kind": "prism", "height": 1}),
+        400,
+        Spec::Refuses,
+    );
+    no(json!({"face": 1, "kind": "prism"}), 404, Spec::Either);
+    c.refused("POST", sw, &p, Send::Raw(None, b"{}"), 415, Spec::Either);
+
+    let cube = id(&c.create(json!({"shape": {"type": "box", "size": [1, 1, 1]}}))["id"]);
+    let du = "/v1/bodies/{id}/dual";
+    let d = c.ok("POST", du, &format!("/v1/bodies/{cube}/dual"), None);
+    assert_eq!(
+        (d["faces"].as_u64(), d["vertices"].as_u64()),
+        (Some(8), Some(6)),
+        "{d}"
+    );
+    c.refused(
+        "POST",
+        du,
+        "/v1/bodies/1/dual",
+        Send::Nothing,
+        422,
+        Spec::Either,
+    );
+    c.refused(
+        "POST",
+        du,
+        "/v1/bodies/999999/dual",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+    c.refused(
+        "POST",
+        du,
+        "/v1/bodies/x/dual",
+        Send::Nothing,
+        400,
+        Spec::Either,
+    );
+
+    let ev = "/v1/bodies/{id}/evert";
+    let e = c.ok("POST", ev, &format!("/v1/bodies/{cube}/evert"), None);
+    assert_eq!(e["id"].as_u64(), Some(cube));
+    c.ok("POST", ev, &format!("/v1/bodies/{cube}/evert"), None);
+    c.refused(
+        "POST",
+        ev,
+        "/v1/bodies/1/evert",
+        Send::Nothing,
+        422,
+        Spec::Either,
+    );
+    c.refused(
+        "POST",
+        ev,
+        "/v1/bodies/999999/evert",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+
+    let cp = "/v1/bodies/{id}/copy";
+    let p = format!("/v1/bodies/{cube}/copy");
+    let copy = c.ok("POST", cp, &p, None);
+    assert_ne!(copy["id"].as_u64(), Some(cube));
+    assert_eq!(copy["faces"].as_u64(), Some(8), "{copy}");
+    c.ok("POST", cp, &p, Some(json!({})));
+    c.ok("POST", cp, &p, Some(json!({"name": "copy1"})));
+    c.refused_json("POST", cp, &p, json!({"name": "copy1"}), 409, Spec::Either);
+    c.refused_json("POST", cp, &p, json!({"nme": "x"}), 400, Spec::Refuses);
+    c.refused(
+        "POST",
+        cp,
+        &p,
+        Send::Raw(Some("application/json"), b"{bad"),
+        400,
+        Spec::Either,
+    );
+    c.refused(
+        "POST",
+        cp,
+        &p,
+        Send::Raw(Some("text/plain"), b"{}"),
+        415,
+        Spec::Either,
+    );
+    c.refused(
+        "POST",
+        cp,
+        "/v1/bodies/999999/copy",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+}
+
+fn cameras(c: &Contract) {
+    let (one, list) = ("/v1/cameras/{name}", "/v1/cameras");
+    let cams = c.ok("GET", list, list, None);
+    assert_eq!(cams["cameras"][0]["name"], "eye", "{cams}");
+    let eye = c.ok("GET", one, "/v1/cameras/eye", None);
+    assert_eq!(eye["name"], "eye");
+    let intrinsics = json!({"width": 64, "height": 48, "fx": 60, "fy": 60, "cx": 32, "cy": 24});
+    c.ok(
+        "PUT",
+        one,
+        "/v1/cameras/front",
+        Some(json!({
+            "look_at": {"eye": [3, 0, 1], "target": [0, 0, 0]},
+            "intrinsics": intrinsics
+        })),
+    );
+    let front = c.ok("GET", one, "/v1/cameras/front", None);
+    let d = front["view_direction"].as_array().expect("a direction");
+    assert!(d[0].as_f64().expect("x") < -0.9, "looks toward −x: {front}");
+    c.ok(
+        "PUT",
+        one,
+        "/v1/cameras/top",
+        Some(json!({
+            "pose": {"position": [0, 0, 5]},
+            "baumgart": {"focal": 35, "ldx": 640, "ldy": 480, "pdx": 36, "pdy": 24}
+        })),
+    );
+    let top = c.ok("GET", one, "/v1/cameras/top", None);
+    assert_eq!(
+        top["view_direction"][2].as_f64(),
+        Some(-1.0),
+        "looks along −k: {top}"
+    );
+    assert_eq!(top["intrinsics"]["fy"].as_f64(), Some(700.0), "{top}");
+    // Replacing a camera is a write too.
+    c.ok(
+        "PUT",
+        one,
+        "/v1/cameras/top",
+        Some(json!({"pose": {}, "intrinsics": intrinsics})),
+    );
+    let cams = c.ok("GET", list, list, None);
+    assert_eq!(cams["cameras"].as_array().map(Vec::len), Some(3), "{cams}");
+
+    let p = "/v1/cameras/side";
+    let no =
+        |body: Value, status: u16, spec: Spec| c.refused_json("PUT", one, p, body, status, spec);
+    let lensless = no(json!({"pose": {}}), 422, Spec::Refuses);
+    assert_eq!(lensless["type"], "urn:winged:problem:invalid-camera");
+    no(
+        json!({"pose": {}, "look_at": {"eye": [1, 0, 0], "target": [0, 0, 0]}, "intrinsics": intrinsics}),
+        422,
+        Spec::Refuses,
+    );
+    no(
+        json!({"pose": {}, "intrinsics": {"width": 0, "height": 48, "fx": 60, "fy": 60, "cx": 32, "cy": 24}}),
+        422,
+        Spec::Refuses,
+    );
+    no(
+        json!({"look_at": {"eye": [1, 1, 1], "target": [1, 1, 1]}, "intrinsics": intrinsics}),
+        422,
+        Spec::Either,
+    );
+    no(
+        json!({"pose": {}, "intrinsics": intrinsics, "lens": 1}),
+        400,
+        Spec::Refuses,
+    );
+    no(
+        json!({"pose": {}, "intrinsics": {"width": 64}}),
+        400,
+        Spec::Refuses,
+    );
+    c.refused_json(
+        "PUT",
+        one,
+        "/v1/cameras/%20side",
+        json!({"pose": {}, "intrinsics": intrinsics}),
+        400,
+        Spec::Either,
+    );
+    c.refused(
+        "PUT",
+        one,
+        p,
+        Send::Raw(Some("text/plain"), b"{}"),
+        415,
+        Spec::Either,
+    );
+    c.refused(
+        "GET",
+        one,
+        "/v1/cameras/nowhere",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+
+    c.ok("DELETE", one, "/v1/cameras/top", None);
+    c.refused(
+        "DELETE",
+        one,
+        "/v1/cameras/top",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+    c.refused(
+        "GET",
+        one,
+        "/v1/cameras/top",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+}
+
+fn lights(c: &Contract) {
+    let (one, list) = ("/v1/lights/{name}", "/v1/lights");
+    let ls = c.ok("GET", list, list, None);
+    assert_eq!(ls["lights"][0]["name"], "sun", "{ls}");
+    let sun = c.ok("GET", one, "/v1/lights/sun", None);
+    assert_eq!(sun["type"], "sun");
+    c.ok(
+        "PUT",
+        one,
+        "/v1/lights/lamp",
+        Some(json!({"type": "point", "position": [0, 0, 3]})),
+    );
+    let lamp = c.ok("GET", one, "/v1/lights/lamp", None);
+    assert_eq!(
+        lamp["intensity"].as_f64(),
+        Some(1.0),
+        "the default intensity: {lamp}"
+    );
+    c.ok(
+        "PUT",
+        one,
+        "/v1/lights/dusk",
+        Some(json!({"type": "sun", "direction": [1, 0, -1], "intensity": 0.5})),
+    );
+    let ls = c.ok("GET", list, list, None);
+    assert_eq!(ls["lights"].as_array().map(Vec::len), Some(3), "{ls}");
+
+    let p = "/v1/lights/bad";
+    let no =
+        |body: Value, status: u16, spec: Spec| c.refused_json("PUT", one, p, body, status, spec);
+    let dark = no(
+        json!({"type": "sun", "direction": [0, 0, 0]}),
+        422,
+        Spec::Either,
+    );
+    assert_eq!(dark["type"], "urn:winged:problem:invalid-light");
+    no(
+        json!({"type": "sun", "direction": [0, 0, -1], "intensity": -1}),
+        422,
+        Spec::Refuses,
+    );
+    no(
+        json!({"type": "laser", "direction": [0, 0, -1]}),
+        400,
+        Spec::Refuses,
+    );
+    no(
+        json!({"type": "point", "direction": [0, 0, -1]}),
+        400,
+        Spec::Refuses,
+    );
+    no(json!({"direction": [0, 0, -1]}), 400, Spec::Refuses);
+    c.refused(
+        "PUT",
+        one,
+        p,
+        Send::Raw(Some("text/plain"), b"{}"),
+        415,
+        Spec::Either,
+    );
+    c.refused(
+        "GET",
+        one,
+        "/v1/lights/nowhere",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+
+    c.ok("DELETE", one, "/v1/lights/lamp", None);
+    c.refused(
+        "DELETE",
+        one,
+        "/v1/lights/lamp",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+
+    let w = c.ok("GET", "/v1/world", "/v1/world", None);
+    assert_eq!(
+        (w["cameras"].as_u64(), w["lights"].as_u64()),
+        (Some(2), Some(2)),
+        "{w}"
+    );
+}
+
+fn deletes(c: &Contract) {
+    let t = "/v1/bodies/{id}";
+    let table = body_named(c, "table");
+    let parts = c.ok("GET", t, &format!("/v1/bodies/{table}"), None)["parts"].clone();
+    let gone = c.ok("DELETE", t, &format!("/v1/bodies/{table}"), None);
+    let killed = ids(&gone["killed"]);
+    assert!(killed.contains(&table), "{gone}");
+    assert!(
+        ids(&parts).iter().all(|p| killed.contains(p)),
+        "parts die too: {gone}"
+    );
+    c.refused(
+        "GET",
+        t,
+        &format!("/v1/bodies/{table}"),
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+    c.refused(
+        "DELETE",
+        t,
+        &format!("/v1/bodies/{table}"),
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+    c.refused(
+        "DELETE",
+        t,
+        "/v1/bodies/1",
+        Send::Nothing,
+        422,
+        Spec::Either,
+    );
+    c.refused(
+        "DELETE",
+        t,
+        "/v1/bodies/x",
+        Send::Nothing,
+        400,
+        Spec::Either,
+    );
+}
+
+fn unknown_route(c: &Contract) {
+    let r = c.http.call("GET", "/v1/nowhere", Send::Nothing);
+    assert_eq!(
+        (r.status, r.media_type.as_str()),
+        (404, "application/problem+json")
+    );
+    let v = Validator::new(&c.doc);
+    let problem = json!({"$ref": "#/components/schemas/Problem"});
+    v.validate(&problem, &r.json()).expect("a problem");
+}

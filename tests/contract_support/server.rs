@@ -1,0 +1,169 @@
+//! A real server on an ephemeral port, and a plain HTTP client for it.
+
+use std::net::SocketAddr;
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use winged::model::World;
+
+/// `winged::server::serve` on `127.0.0.1:0` in a thread with its own runtime; shut down
+/// (gracefully) when dropped.
+pub struct TestServer {
+    /// `http://127.0.0.1:PORT`.
+    pub base: String,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    done: mpsc::Receiver<()>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl TestServer {
+    /// Serves `world`.
+    pub fn start(world: World) -> TestServer {
+        let (bound_tx, bound_rx) = mpsc::channel::<SocketAddr>();
+        let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+        let (done_tx, done_rx) = mpsc::channel::<()>();
+        let thread = std::thread::spawn(move || {
+            let rt = tokio::runtime::Builder::new_multi_thread()
+                .worker_threads(2)
+                .enable_all()
+                .build()
+                .expect("a tokio runtime");
+            let served = rt.block_on(winged::server::serve(
+                "127.0.0.1:0".parse().expect("an address"),
+                world,
+                move |addr| {
+                    let _ = bound_tx.send(addr);
+                },
+                async move {
+                    let _ = stop_rx.await;
+                },
+            ));
+            served.expect("the server runs until told to stop");
+            let _ = done_tx.send(());
+        });
+        let addr = bound_rx
+            .recv_timeout(Duration::from_secs(20))
+            .expect("the server binds within 20 s");
+        TestServer {
+            base: format!("http://{addr}"),
+            stop: Some(stop_tx),
+            done: done_rx,
+            thread: Some(thread),
+        }
+    }
+}
+
+impl Drop for TestServer {
+    fn drop(&mut self) {
+        if let Some(stop) = self.stop.take() {
+            let _ = stop.send(());
+        }
+        let finished = self.done.recv_timeout(Duration::from_secs(20)).is_ok();
+        if let Some(t) = self.thread.take()
+            && (finished || t.is_finished())
+        {
+            // A panic in the server thread surfaces here, unless already panicking.
+            if t.join().is_err() && !std::thread::panicking() {
+                panic!("the server thread panicked");
+            }
+        }
+    }
+}
+
+/// What to send as the request body.
+pub enum Send<'a> {
+    /// No body and no Content-Type.
+    Nothing,
+    /// A JSON body with `Content-Type: application/json`.
+    Json(&'a serde_json::Value),
+    /// Raw bytes, with this Content-Type (or none).
+    Raw(Option<&'a str>, &'a [u8]),
+}
+
+/// An answer as received.
+#[derive(Debug)]
+pub struct Reply {
+    /// HTTP status.
+    pub status: u16,
+    /// The Content-Type without parameters, lower-cased ("" if absent).
+    pub media_type: String,
+    /// The body as text.
+    pub text: String,
+}
+
+impl Reply {
+    /// The body as JSON.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::from_str(&self.text)
+            .unwrap_or_else(|e| panic!("the answer is not JSON ({e}): {}", self.text))
+    }
+}
+
+/// A blocking HTTP client that treats every status as an answer.
+pub struct Http {
+    agent: ureq::Agent,
+    base: String,
+}
+
+impl Http {
+    /// A client for `base` (`http://host:port`).
+    pub fn new(base: &str) -> Http {
+        let agent: ureq::Agent = ureq::Agent::config_builder()
+            .http_status_as_error(false)
+            .timeout_global(Some(Duration::from_secs(30)))
+            .build()
+            .into();
+        Http {
+            agent,
+            base: base.to_string(),
+        }
+    }
+
+    /// Sends `method path` (the path with any query) and reads the answer.
+    pub fn call(&self, method: &str, path: &str, body: Send) -> Reply {
+        let url = format!("{}{}", self.base, path);
+        let result = match (method, body) {
+            ("GET", Send::Nothing) => self.agent.get(&url).call(),
+            ("DELETE", Send::Nothing) => self.agent.delete(&url).call(),
+            (m, body) => {
+                let b = match m {
+                    "POST" => self.agent.post(&url),
+                    "PUT" => self.agent.put(&url),
+                    "PATCH" => self.agent.patch(&url),
+                    other => panic!("the client cannot send a body with {other}"),
+                };
+                match body {
+                    Send::Nothing => b.send_empty(),
+                    Send::Json(v) => b
+                        .header("content-type", "application/json")
+                        .send(serde_json::to_vec(v).expect("JSON")),
+                    Send::Raw(Some(ct), bytes) => b.header("content-type", ct).send(bytes),
+                    Send::Raw(None, bytes) => b.send(bytes),
+                }
+            }
+        };
+        let mut res = result.unwrap_or_else(|e| panic!("{method} {path}: {e}"));
+        let media_type = res
+            .headers()
+            .get("content-type")
+            .and_then(|v| v.to_str().ok())
+            .map(|v| {
+                v.split(';')
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+                    .to_ascii_lowercase()
+            })
+            .unwrap_or_default();
+        let text = res
+            .body_mut()
+            .read_to_string()
+            .unwrap_or_else(|e| panic!("{method} {path}: reading the answer: {e}"));
+        Reply {
+            status: res.status().as_u16(),
+            media_type,
+            text,
+        }
+    }
+}
