@@ -10,7 +10,7 @@ set -euo pipefail
 echo "# The world: revision and counts"
 r=$(call GET /v1/world)
 IFS=$'\t' read -r rev nb nf ne nv <<<"$(field "$r" revision bodies faces edges vertices)"
-echo "world: revision $rev, $nb bodies (the world body included), $nf faces, $ne edges, $nv vertices"
+echo "world: revision $rev, $nb bodies, $nf faces, $ne edges, $nv vertices"
 
 echo "# The table, found by name"
 r=$(BRIEF=1 call GET "/v1/bodies?name=table")

@@ -16,6 +16,8 @@ refused() {
     if [ -n "$data" ]; then
         args+=(-H 'Content-Type: application/json' --data-binary "$data")
         echo "\$ curl -i -X $method \$WINGED$path -H 'Content-Type: application/json' -d '$data'"
+    elif [ "$method" = GET ]; then
+        echo "\$ curl -i \$WINGED$path"
     else
         echo "\$ curl -i -X $method \$WINGED$path"
     fi
