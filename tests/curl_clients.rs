@@ -139,11 +139,19 @@ fn euler_cube_builds_checks_moves_and_deletes_a_cube() {
     assert!(out.contains("moved: world position (3"), "{out}");
     assert!(out.contains("euler_cube: ok (body "), "{out}");
     // The transcript shows every request as a curl command line, and its answer.
-    assert_eq!(out.matches("/euler -H 'Content-Type: application/json'").count(), 12, "{out}");
+    assert_eq!(
+        out.matches("/euler -H 'Content-Type: application/json'")
+            .count(),
+        12,
+        "{out}"
+    );
     assert!(out.contains("\"op\": \"mkfe\""), "{out}");
     // Again, without the transcript.
     let out = run_ok("euler_cube.sh", &server.url, &[("QUIET", "1")]);
-    assert!(!out.contains("$ curl"), "QUIET=1 keeps the transcript out: {out}");
+    assert!(
+        !out.contains("$ curl"),
+        "QUIET=1 keeps the transcript out: {out}"
+    );
     assert!(out.contains("euler_cube: ok"), "{out}");
 }
 
