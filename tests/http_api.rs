@@ -404,6 +404,7 @@ fn cameras_and_lights() {
     let zero_w = json!({"pose": {}, "intrinsics": {"width": 0, "height": 480, "fx": 5, "fy": 500, "cx": 320, "cy": 240}});
     s.put("/v1/cameras/bad", &zero_w).problem(422);
     s.get("/v1/cameras/bad").problem(404);
+    s.get("/v1/cameras/%FF").problem(400);
     s.delete("/v1/cameras/tv").ok();
     s.get("/v1/cameras/tv").problem(404);
     s.delete("/v1/cameras/tv").problem(404);

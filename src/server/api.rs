@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use axum::extract::rejection::{JsonRejection, PathRejection, QueryRejection};
-use axum::extract::{DefaultBodyLimit, Path, Query, State};
+use axum::extract::{DefaultBodyLimit, Extension, Path, Query, State};
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
@@ -53,11 +53,25 @@ pub fn router(handle: Handle) -> Router {
             get(get_light).put(put_light).delete(delete_light),
         )
         .fallback(not_found)
+        .layer(Extension(HeavyReads::for_this_machine()))
         .layer(DefaultBodyLimit::max(MAX_REQUEST_BYTES))
         .with_state(handle)
 }
 
 type Answer = Result<Response, Problem>;
+
+/// The gate heavy reads (topology dumps) pass: one permit per core but one, at least one.
+#[derive(Clone)]
+struct HeavyReads(Arc<tokio::sync::Semaphore>);
+
+impl HeavyReads {
+    fn for_this_machine() -> Self {
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        HeavyReads(Arc::new(tokio::sync::Semaphore::new(
+            cores.saturating_sub(1).max(1),
+        )))
+    }
+}
 
 /// A write's answer: the outcome's fields and the revision.
 #[derive(Serialize)]
@@ -79,6 +93,10 @@ async fn snapshot(h: &Handle) -> Result<Arc<World>, Problem> {
 
 fn id_of(p: Result<Path<u64>, PathRejection>) -> Result<u64, Problem> {
     p.map(|Path(id)| id).map_err(Problem::from)
+}
+
+fn name_of(p: Result<Path<String>, PathRejection>) -> Result<String, Problem> {
+    p.map(|Path(n)| n).map_err(Problem::from)
 }
 
 fn json_of<T>(j: Result<Json<T>, JsonRejection>) -> Result<T, Problem> {
@@ -183,8 +201,18 @@ async fn get_body(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>)
     Ok(Json(v).into_response())
 }
 
-async fn topology(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) -> Answer {
+async fn topology(
+    State(h): State<Handle>,
+    Extension(heavy): Extension<HeavyReads>,
+    id: Result<Path<u64>, PathRejection>,
+) -> Answer {
     let id = id_of(id)?;
+    // At most one heavy read per spare core at a time, so that small reads keep a core.
+    let _permit = heavy
+        .0
+        .acquire()
+        .await
+        .map_err(|_| Problem::unavailable())?;
     let w = snapshot(&h).await?;
     let b = BodyId(Serial(id));
     if w.node(b).is_none() {
@@ -350,33 +378,31 @@ async fn list_cameras(State(h): State<Handle>) -> Answer {
     Ok(Json(json!({ "cameras": cams, "revision": w.revision() })).into_response())
 }
 
-async fn get_camera(State(h): State<Handle>, name: Path<String>) -> Answer {
+async fn get_camera(State(h): State<Handle>, name: Result<Path<String>, PathRejection>) -> Answer {
+    let name = name_of(name)?;
     let w = snapshot(&h).await?;
     let c = w
         .camera(&name)
-        .ok_or_else(|| Problem::not_found(format!("no camera is named {:?}", name.0)))?;
+        .ok_or_else(|| Problem::not_found(format!("no camera is named {:?}", name)))?;
     Ok(Json(CameraDto::new(&name, c)).into_response())
 }
 
 async fn put_camera(
     State(h): State<Handle>,
-    name: Path<String>,
+    name: Result<Path<String>, PathRejection>,
     req: Result<Json<CameraReq>, JsonRejection>,
 ) -> Answer {
+    let name = name_of(name)?;
     let camera = json_of(req)?;
-    write(
-        &h,
-        Edit::PutCamera {
-            name: name.0,
-            camera,
-        },
-        StatusCode::OK,
-    )
-    .await
+    write(&h, Edit::PutCamera { name, camera }, StatusCode::OK).await
 }
 
-async fn delete_camera(State(h): State<Handle>, name: Path<String>) -> Answer {
-    write(&h, Edit::DeleteCamera { name: name.0 }, StatusCode::OK).await
+async fn delete_camera(
+    State(h): State<Handle>,
+    name: Result<Path<String>, PathRejection>,
+) -> Answer {
+    let name = name_of(name)?;
+    write(&h, Edit::DeleteCamera { name }, StatusCode::OK).await
 }
 
 async fn list_lights(State(h): State<Handle>) -> Answer {
@@ -392,33 +418,31 @@ async fn list_lights(State(h): State<Handle>) -> Answer {
     Ok(Json(json!({ "lights": lights, "revision": w.revision() })).into_response())
 }
 
-async fn get_light(State(h): State<Handle>, name: Path<String>) -> Answer {
+async fn get_light(State(h): State<Handle>, name: Result<Path<String>, PathRejection>) -> Answer {
+    let name = name_of(name)?;
     let w = snapshot(&h).await?;
     let l = w
         .light(&name)
-        .ok_or_else(|| Problem::not_found(format!("no light is named {:?}", name.0)))?;
+        .ok_or_else(|| Problem::not_found(format!("no light is named {:?}", name)))?;
     let mut v = serde_json::to_value(LightDto::from(l)).unwrap_or_default();
-    v["name"] = json!(name.0);
+    v["name"] = json!(name);
     Ok(Json(v).into_response())
 }
 
 async fn put_light(
     State(h): State<Handle>,
-    name: Path<String>,
+    name: Result<Path<String>, PathRejection>,
     req: Result<Json<LightDto>, JsonRejection>,
 ) -> Answer {
+    let name = name_of(name)?;
     let light = json_of(req)?;
-    write(
-        &h,
-        Edit::PutLight {
-            name: name.0,
-            light,
-        },
-        StatusCode::OK,
-    )
-    .await
+    write(&h, Edit::PutLight { name, light }, StatusCode::OK).await
 }
 
-async fn delete_light(State(h): State<Handle>, name: Path<String>) -> Answer {
-    write(&h, Edit::DeleteLight { name: name.0 }, StatusCode::OK).await
+async fn delete_light(
+    State(h): State<Handle>,
+    name: Result<Path<String>, PathRejection>,
+) -> Answer {
+    let name = name_of(name)?;
+    write(&h, Edit::DeleteLight { name }, StatusCode::OK).await
 }
