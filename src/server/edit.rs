@@ -164,8 +164,6 @@ pub enum EditError {
     /// An id that names nothing, or names something of another kind or body.
     #[error("{id} is not the id of any {kind} in body {body}")]
     NotInBody {
-        /// "face", "edge" or "vertex".
-        what: &'static str,
         /// The id given.
         id: u64,
         /// The kind expected.
@@ -219,37 +217,32 @@ fn body_of(world: &World, b: BodyId) -> &Body {
     world.body(b).expect("body_id checked the body")
 }
 
+/// The entity of body `b` with serial `id`, found by `find` (a `*_by_serial` lookup),
+/// or a 404-class error naming the `kind` sought.
+fn in_body<T>(
+    world: &World,
+    b: BodyId,
+    id: u64,
+    kind: &'static str,
+    find: impl Fn(&Body, Serial) -> Option<T>,
+) -> Result<T, EditError> {
+    find(body_of(world, b), Serial(id)).ok_or(EditError::NotInBody {
+        id,
+        kind,
+        body: b.get(),
+    })
+}
+
 fn face_in(world: &World, b: BodyId, id: u64) -> Result<FaceId, EditError> {
-    body_of(world, b)
-        .face_by_serial(Serial(id))
-        .ok_or(EditError::NotInBody {
-            what: "face",
-            id,
-            kind: "face",
-            body: b.get(),
-        })
+    in_body(world, b, id, "face", Body::face_by_serial)
 }
 
 fn edge_in(world: &World, b: BodyId, id: u64) -> Result<EdgeId, EditError> {
-    body_of(world, b)
-        .edge_by_serial(Serial(id))
-        .ok_or(EditError::NotInBody {
-            what: "edge",
-            id,
-            kind: "edge",
-            body: b.get(),
-        })
+    in_body(world, b, id, "edge", Body::edge_by_serial)
 }
 
 fn vertex_in(world: &World, b: BodyId, id: u64) -> Result<VertexId, EditError> {
-    body_of(world, b)
-        .vertex_by_serial(Serial(id))
-        .ok_or(EditError::NotInBody {
-            what: "vertex",
-            id,
-            kind: "vertex",
-            body: b.get(),
-        })
+    in_body(world, b, id, "vertex", Body::vertex_by_serial)
 }
 
 /// The body holding face `id`, wherever it is, and the face.
@@ -691,7 +684,6 @@ fn transform(world: &mut World, b: BodyId, req: &TransformReq) -> Result<(), Edi
             Some((owner, e)) if owner == b && e != Entity::Body => e,
             _ => {
                 return Err(EditError::NotInBody {
-                    what: "target",
                     id,
                     kind: "face, edge or vertex",
                     body: b.get(),
