@@ -59,7 +59,6 @@ async fn create_box(h: &Handle) -> u64 {
             },
         }))
         .await
-        .expect("actor running")
         .expect("a box");
     made.outcome.id.expect("body id")
 }
@@ -88,7 +87,6 @@ async fn mkev_klev(h: &Handle, body: u64, face: u64, vertex: u64) {
             },
         })
         .await
-        .expect("actor running")
         .expect("MKEV");
     let v = made.outcome.vertex.expect("new vertex");
     h.apply(Edit::Euler {
@@ -96,7 +94,6 @@ async fn mkev_klev(h: &Handle, body: u64, face: u64, vertex: u64) {
         op: EulerOp::Klev { vertex: v },
     })
     .await
-    .expect("actor running")
     .expect("KLEV");
 }
 
@@ -135,7 +132,7 @@ where
 
 fn translate_bench(c: &mut Criterion) {
     let rt = runtime();
-    let h = rt.block_on(async { actor::spawn(World::new()) });
+    let h = rt.block_on(async { actor::spawn_in_memory(World::new()) });
     let (body, _, _) = rt.block_on(make_box(&h));
     let mut g = c.benchmark_group("translate");
 
@@ -149,7 +146,7 @@ fn translate_bench(c: &mut Criterion) {
                 let start = Instant::now();
                 for i in 0..iters {
                     let x = if i % 2 == 0 { sign } else { -sign };
-                    black_box(h.apply(translate(body, x)).await.unwrap().unwrap());
+                    black_box(h.apply(translate(body, x)).await.unwrap());
                 }
                 start.elapsed()
             })
@@ -166,7 +163,7 @@ fn translate_bench(c: &mut Criterion) {
                     let h = h.clone();
                     async move {
                         let x = if i % 2 == 0 { 1.0 } else { -1.0 };
-                        black_box(h.apply(translate(body, x)).await.unwrap().unwrap());
+                        black_box(h.apply(translate(body, x)).await.unwrap());
                     }
                 });
             }
@@ -178,7 +175,7 @@ fn translate_bench(c: &mut Criterion) {
 
 fn snapshot_bench(c: &mut Criterion) {
     let rt = runtime();
-    let h = rt.block_on(async { actor::spawn(World::new()) });
+    let h = rt.block_on(async { actor::spawn_in_memory(World::new()) });
     let (body, _, _) = rt.block_on(make_box(&h));
     let mut g = c.benchmark_group("snapshot");
 
@@ -225,7 +222,7 @@ fn snapshot_bench(c: &mut Criterion) {
                     async move {
                         if i % 2 == 0 {
                             let x = if i % 4 == 0 { 1.0 } else { -1.0 };
-                            black_box(h.apply(translate(body, x)).await.unwrap().unwrap());
+                            black_box(h.apply(translate(body, x)).await.unwrap());
                         } else {
                             black_box(h.snapshot().await.unwrap());
                         }
@@ -240,7 +237,7 @@ fn snapshot_bench(c: &mut Criterion) {
 
 fn euler_bench(c: &mut Criterion) {
     let rt = runtime();
-    let h = rt.block_on(async { actor::spawn(World::new()) });
+    let h = rt.block_on(async { actor::spawn_in_memory(World::new()) });
     // One box per requester, so that each one's MKEV/KLEV pairs never meet another's.
     let boxes: Vec<(u64, u64, u64)> = rt.block_on(async {
         let mut v = Vec::new();
@@ -293,7 +290,7 @@ fn big_world_bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("write_then_snapshot");
     g.throughput(Throughput::Elements(2));
     for bodies in [10usize, 10_000] {
-        let h = rt.block_on(async { actor::spawn(World::new()) });
+        let h = rt.block_on(async { actor::spawn_in_memory(World::new()) });
         let body = rt.block_on(async {
             for _ in 1..bodies {
                 create_box(&h).await;
@@ -307,7 +304,7 @@ fn big_world_bench(c: &mut Criterion) {
                     let start = Instant::now();
                     for i in 0..iters {
                         let x = if i % 2 == 0 { 1.0 } else { -1.0 };
-                        black_box(h.apply(translate(body, x)).await.unwrap().unwrap());
+                        black_box(h.apply(translate(body, x)).await.unwrap());
                         black_box(h.snapshot().await.unwrap());
                     }
                     start.elapsed()

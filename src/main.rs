@@ -74,9 +74,24 @@ fn serve(addr: SocketAddr, data: Option<PathBuf>, demo: bool) -> ExitCode {
         }
     };
     let bodies = world.body_count();
+    let app = match runtime.block_on(async {
+        server::build(
+            world,
+            server::actor::InMemory,
+            Vec::new(),
+            server::Limits::default(),
+            std::sync::Arc::new(server::actor::Unobserved),
+        )
+    }) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("winged: cannot start the world's owner: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
     let result = runtime.block_on(server::serve(
         addr,
-        world,
+        app,
         |bound| info!(%bound, bodies, "winged is listening; try: curl http://{bound}/v1/world"),
         shutdown_signal(),
     ));

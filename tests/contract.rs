@@ -23,7 +23,7 @@ use contract_support::schema::Validator;
 use contract_support::server::{Http, Reply, Send, TestServer};
 
 const SPEC_YAML: &str = include_str!("../proto/openapi.yaml");
-const ROUTER_SOURCE: &str = include_str!("../src/server/api.rs");
+const ROUTER_SOURCE: &str = include_str!("../src/server/api/mod.rs");
 const HTTP_METHODS: &[&str] = &[
     "get", "put", "post", "delete", "options", "head", "patch", "trace",
 ];

@@ -1,30 +1,108 @@
-//! The single owner of the world: a tokio task that applies edits one at a time and
-//! hands out immutable snapshots.
+//! The single owner of the world: a thread that applies edits one at a time, makes them
+//! durable in groups, and hands out immutable snapshots.
 //!
 //! Handlers talk to it through a bounded channel and get their answers on oneshot
-//! channels. A write is applied and answered with the world's revision after it. A read
-//! asks for a snapshot (an `Arc<World>` at some revision) and does its work outside the
-//! actor, so a long read never delays a write and a write never tears a read. A snapshot
-//! is made only when a read asks for one after a write: cloning the world copies the
-//! parts tree and shares every body (`Arc`), and a later write copies only the body it
-//! changes.
+//! channels. The owner takes every command waiting (up to a batch), applies the writes
+//! in order, appends the applied ones to the [`Journal`] in one commit (group commit: one
+//! fsync for the whole group), and only then acknowledges them and publishes their
+//! [`Change`]s. A refused write is answered at once and never journaled.
+//!
+//! Reads ask for a snapshot (an `Arc<World>` of durable state) and do their work outside
+//! the owner, so a long read never delays a write and a write never tears a read. A
+//! snapshot is made only when a read asks for one after a write: cloning the world
+//! copies the parts tree and shares every body (`Arc`), and a later write copies only the
+//! body it changes. The newest snapshot is also kept where handlers can take it without
+//! queueing, until the next write.
+//!
+//! When the queue is full, writes are refused at once with [`WriteError::Busy`] (the HTTP
+//! layer answers 503 with `Retry-After`) rather than queued without bound.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 use tokio::sync::{mpsc, oneshot};
 
+use super::changes::{self, Change};
 use super::edit::{Edit, EditError, Outcome, apply};
+use super::events::Feed;
 use crate::model::World;
 
-/// How many requests may wait for the actor before senders wait too.
+/// How many requests may wait for the owner by default.
 pub const QUEUE: usize = 1024;
 
-/// A message to the actor.
+/// The most writes committed together.
+pub const MAX_BATCH: usize = 1024;
+
+/// One applied edit on its way to the journal.
+#[derive(Debug, Clone, Copy)]
+pub struct Entry<'a> {
+    /// The world revision the edit produced.
+    pub revision: u64,
+    /// The edit, as applied.
+    pub edit: &'a Edit,
+    /// What it changed.
+    pub change: &'a Change,
+}
+
+/// Where the world's owner makes applied edits durable before acknowledging them.
+pub trait Journal: Send + 'static {
+    /// Why the journal failed.
+    type Error: std::error::Error;
+
+    /// Makes `entries` (consecutive revisions, oldest first) durable: all of them when
+    /// `Ok`, none of them when `Err`.
+    fn append(&mut self, entries: &[Entry<'_>]) -> Result<(), Self::Error>;
+
+    /// Called after every committed group with the world as it now is (it may start a
+    /// snapshot of it).
+    fn committed(&mut self, world: &World);
+
+    /// The world as durable, after an append failed (its edits are dropped).
+    fn reload(&mut self) -> Result<World, Self::Error>;
+
+    /// Called once when the owner stops, with the final world.
+    fn close(&mut self, world: &World);
+}
+
+/// No durability: the world lives in memory only.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct InMemory;
+
+impl Journal for InMemory {
+    type Error = std::convert::Infallible;
+    fn append(&mut self, _: &[Entry<'_>]) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    fn committed(&mut self, _: &World) {}
+    fn reload(&mut self) -> Result<World, Self::Error> {
+        unreachable!("an in-memory journal never fails an append")
+    }
+    fn close(&mut self, _: &World) {}
+}
+
+/// What the owner reports as it works (for metrics).
+pub trait Observer: Send + Sync + 'static {
+    /// A group of `entries` was committed in `elapsed`.
+    fn committed(&self, elapsed: Duration, entries: usize);
+    /// A write was refused because the queue was full.
+    fn overloaded(&self);
+}
+
+/// An observer that ignores everything.
+pub struct Unobserved;
+
+impl Observer for Unobserved {
+    fn committed(&self, _: Duration, _: usize) {}
+    fn overloaded(&self) {}
+}
+
+/// A message to the owner.
 enum Command {
-    /// Apply an edit and answer with its outcome and the revision after it.
+    /// Apply an edit (if the world is at `expected`) and answer once it is durable.
     Apply {
         edit: Box<Edit>,
-        reply: oneshot::Sender<Result<Applied, EditError>>,
+        expected: Option<u64>,
+        reply: oneshot::Sender<Result<Applied, WriteError>>,
     },
     /// Answer with a snapshot of the world.
     Snapshot { reply: oneshot::Sender<Arc<World>> },
@@ -39,33 +117,86 @@ pub struct Applied {
     pub revision: u64,
 }
 
+/// Why a write was not applied. In every case the world is unchanged by it.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// The world refused the edit.
+    #[error(transparent)]
+    Refused(#[from] EditError),
+    /// The write's precondition failed: the world has moved on.
+    #[error("the world is at revision {actual}, not the expected {expected}")]
+    Conflict {
+        /// The revision the client expected.
+        expected: u64,
+        /// The world's revision.
+        actual: u64,
+    },
+    /// The journal could not be written; the edit was dropped.
+    #[error("the write could not be made durable ({0}); it was not applied")]
+    Storage(String),
+    /// Too many requests are waiting for the owner.
+    #[error("the server is busy: {0} requests are waiting for the world")]
+    Busy(usize),
+    /// The owner is gone: the server is shutting down.
+    #[error("the world's owner has stopped")]
+    Stopped,
+}
+
 /// The actor is gone: the server is shutting down.
 #[derive(Debug, Clone, Copy, thiserror::Error)]
 #[error("the world's owner has stopped")]
 pub struct Stopped;
 
-/// A cheap, cloneable handle for talking to the actor.
+/// The newest snapshot, kept for handlers to take without queueing.
+type Latest = Arc<Mutex<Option<Arc<World>>>>;
+
+/// A cheap, cloneable handle for talking to the owner.
 #[derive(Clone)]
 pub struct Handle {
     tx: mpsc::Sender<Command>,
+    latest: Latest,
+    observer: Arc<dyn Observer>,
+    failure: Failure,
 }
 
+/// Why the owner refuses writes for good, once its storage failed beyond repair.
+type Failure = Arc<Mutex<Option<String>>>;
+
 impl Handle {
-    /// Applies `edit`; `Ok(Err(_))` is the world's refusal (the world is unchanged).
-    pub async fn apply(&self, edit: Edit) -> Result<Result<Applied, EditError>, Stopped> {
+    /// Applies `edit` if the world's revision is `expected` (any revision when `None`),
+    /// and answers once it is durable.
+    pub async fn apply_if(
+        &self,
+        edit: Edit,
+        expected: Option<u64>,
+    ) -> Result<Applied, WriteError> {
         let (reply, rx) = oneshot::channel();
-        self.tx
-            .send(Command::Apply {
-                edit: Box::new(edit),
-                reply,
-            })
-            .await
-            .map_err(|_| Stopped)?;
-        rx.await.map_err(|_| Stopped)
+        let cmd = Command::Apply {
+            edit: Box::new(edit),
+            expected,
+            reply,
+        };
+        match self.tx.try_send(cmd) {
+            Ok(()) => {}
+            Err(mpsc::error::TrySendError::Full(_)) => {
+                self.observer.overloaded();
+                return Err(WriteError::Busy(self.tx.max_capacity()));
+            }
+            Err(mpsc::error::TrySendError::Closed(_)) => return Err(WriteError::Stopped),
+        }
+        rx.await.map_err(|_| WriteError::Stopped)?
     }
 
-    /// A snapshot of the world as of the last applied edit.
+    /// Applies `edit` whatever the world's revision.
+    pub async fn apply(&self, edit: Edit) -> Result<Applied, WriteError> {
+        self.apply_if(edit, None).await
+    }
+
+    /// A snapshot of the world as of the last durable write.
     pub async fn snapshot(&self) -> Result<Arc<World>, Stopped> {
+        if let Some(w) = self.latest.lock().unwrap_or_else(|p| p.into_inner()).clone() {
+            return Ok(w);
+        }
         let (reply, rx) = oneshot::channel();
         self.tx
             .send(Command::Snapshot { reply })
@@ -73,37 +204,259 @@ impl Handle {
             .map_err(|_| Stopped)?;
         rx.await.map_err(|_| Stopped)
     }
+
+    /// Requests waiting for the owner now.
+    pub fn queue_depth(&self) -> usize {
+        self.tx.max_capacity() - self.tx.capacity()
+    }
+
+    /// Whether the owner is still running.
+    pub fn is_running(&self) -> bool {
+        !self.tx.is_closed()
+    }
+
+    /// Why writes are refused for good, if storage failed and the world could not be
+    /// reloaded from it.
+    pub fn storage_failure(&self) -> Option<String> {
+        self.failure
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clone()
+    }
 }
 
-/// Starts the actor on the current tokio runtime, owning `world`. It stops when every
-/// [`Handle`] is dropped.
-pub fn spawn(world: World) -> Handle {
-    let (tx, rx) = mpsc::channel(QUEUE);
-    tokio::spawn(run(world, rx));
-    Handle { tx }
+/// Settings of the owner.
+#[derive(Debug, Clone, Copy)]
+pub struct ActorConfig {
+    /// Requests that may wait before writes are refused as busy.
+    pub queue: usize,
+    /// The most writes committed together.
+    pub max_batch: usize,
 }
 
-async fn run(mut world: World, mut rx: mpsc::Receiver<Command>) {
-    let mut snapshot: Option<Arc<World>> = None;
-    while let Some(cmd) = rx.recv().await {
-        match cmd {
-            Command::Apply { edit, reply } => {
-                let result = apply(&mut world, &edit).map(|outcome| Applied {
-                    outcome,
-                    revision: world.revision(),
-                });
-                if result.is_ok() {
-                    snapshot = None;
+impl Default for ActorConfig {
+    fn default() -> Self {
+        ActorConfig {
+            queue: QUEUE,
+            max_batch: MAX_BATCH,
+        }
+    }
+}
+
+/// Starts the owner on a thread of its own, owning `world` and `journal`, publishing to
+/// `feed`. It stops when every [`Handle`] is dropped, after calling
+/// [`Journal::close`].
+pub fn spawn<J: Journal>(
+    world: World,
+    journal: J,
+    feed: Arc<Feed>,
+    observer: Arc<dyn Observer>,
+    config: ActorConfig,
+) -> std::io::Result<Handle> {
+    let (tx, rx) = mpsc::channel(config.queue.max(1));
+    let latest: Latest = Arc::new(Mutex::new(None));
+    let failure: Failure = Arc::new(Mutex::new(None));
+    let owner = Owner {
+        world,
+        journal,
+        feed,
+        observer: observer.clone(),
+        latest: latest.clone(),
+        max_batch: config.max_batch.max(1),
+        failed: failure.clone(),
+    };
+    std::thread::Builder::new()
+        .name("world-owner".into())
+        .spawn(move || owner.run(rx))?;
+    Ok(Handle {
+        tx,
+        latest,
+        observer,
+        failure,
+    })
+}
+
+/// Starts an owner of `world` with no durability (tests, `--memory`).
+pub fn spawn_in_memory(world: World) -> Handle {
+    let feed = Feed::new(1, world.revision(), Vec::new());
+    spawn(
+        world,
+        InMemory,
+        feed,
+        Arc::new(Unobserved),
+        ActorConfig::default(),
+    )
+    .expect("a thread can be started")
+}
+
+struct Owner<J> {
+    world: World,
+    journal: J,
+    feed: Arc<Feed>,
+    observer: Arc<dyn Observer>,
+    latest: Latest,
+    max_batch: usize,
+    /// Set when the journal failed and the world could not be reloaded: writes are
+    /// refused from then on.
+    failed: Failure,
+}
+
+/// An applied write waiting for its commit.
+struct Pending {
+    reply: oneshot::Sender<Result<Applied, WriteError>>,
+    edit: Box<Edit>,
+    applied: Applied,
+    change: Change,
+}
+
+impl<J: Journal> Owner<J> {
+    fn run(mut self, mut rx: mpsc::Receiver<Command>) {
+        let mut batch = Vec::with_capacity(self.max_batch);
+        while let Some(first) = rx.blocking_recv() {
+            batch.push(first);
+            while batch.len() < self.max_batch {
+                match rx.try_recv() {
+                    Ok(cmd) => batch.push(cmd),
+                    Err(_) => break,
                 }
-                // A requester that gave up waiting is no reason to stop.
-                let _ = reply.send(result);
             }
-            Command::Snapshot { reply } => {
-                let snap = snapshot
-                    .get_or_insert_with(|| Arc::new(world.clone()))
-                    .clone();
-                let _ = reply.send(snap);
+            self.handle(&mut batch);
+        }
+        self.journal.close(&self.world);
+    }
+
+    /// Applies the writes of `batch`, commits them together, then answers everyone.
+    fn handle(&mut self, batch: &mut Vec<Command>) {
+        let mut pending: Vec<Pending> = Vec::new();
+        let mut readers = Vec::new();
+        for cmd in batch.drain(..) {
+            match cmd {
+                Command::Apply {
+                    edit,
+                    expected,
+                    reply,
+                } => {
+                    if let Some(p) = self.apply_one(edit, expected, reply) {
+                        pending.push(p);
+                    }
+                }
+                Command::Snapshot { reply } => readers.push(reply),
             }
         }
+        if !pending.is_empty() {
+            self.commit(pending);
+        }
+        if !readers.is_empty() {
+            let snap = self.snapshot();
+            for r in readers {
+                let _ = r.send(snap.clone());
+            }
+        }
+    }
+
+    /// Applies one write; answers a refusal at once, or returns it pending its commit.
+    fn apply_one(
+        &mut self,
+        edit: Box<Edit>,
+        expected: Option<u64>,
+        reply: oneshot::Sender<Result<Applied, WriteError>>,
+    ) -> Option<Pending> {
+        let failed = self
+            .failed
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clone();
+        if let Some(why) = failed {
+            let _ = reply.send(Err(WriteError::Storage(why)));
+            return None;
+        }
+        let actual = self.world.revision();
+        if let Some(expected) = expected
+            && expected != actual
+        {
+            let _ = reply.send(Err(WriteError::Conflict { expected, actual }));
+            return None;
+        }
+        let before = changes::before(&self.world, &edit);
+        match apply(&mut self.world, &edit) {
+            Ok(outcome) => {
+                let revision = self.world.revision();
+                let change = changes::describe(revision, &edit, &outcome, &before, &self.world);
+                Some(Pending {
+                    reply,
+                    edit,
+                    applied: Applied { outcome, revision },
+                    change,
+                })
+            }
+            Err(e) => {
+                // A requester that gave up waiting is no reason to stop.
+                let _ = reply.send(Err(WriteError::Refused(e)));
+                None
+            }
+        }
+    }
+
+    /// Journals the applied writes in one commit, then acknowledges and publishes them;
+    /// if the journal fails, refuses them all and goes back to the durable world.
+    fn commit(&mut self, pending: Vec<Pending>) {
+        // Readers must not see these writes before they are durable.
+        self.latest
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take();
+        let started = Instant::now();
+        let entries: Vec<Entry<'_>> = pending
+            .iter()
+            .map(|p| Entry {
+                revision: p.applied.revision,
+                edit: &p.edit,
+                change: &p.change,
+            })
+            .collect();
+        let result = self.journal.append(&entries);
+        drop(entries);
+        match result {
+            Ok(()) => {
+                self.observer.committed(started.elapsed(), pending.len());
+                let mut changes = Vec::with_capacity(pending.len());
+                for p in pending {
+                    let _ = p.reply.send(Ok(p.applied));
+                    changes.push(p.change);
+                }
+                self.feed.publish(changes);
+                self.journal.committed(&self.world);
+            }
+            Err(e) => {
+                let why = e.to_string();
+                tracing::error!(error = %why, writes = pending.len(), "journal append failed; the writes are refused");
+                for p in pending {
+                    let _ = p.reply.send(Err(WriteError::Storage(why.clone())));
+                }
+                match self.journal.reload() {
+                    Ok(world) => {
+                        tracing::warn!(
+                            revision = world.revision(),
+                            "world reloaded from storage"
+                        );
+                        self.feed.reset_revision(world.revision());
+                        self.world = world;
+                    }
+                    Err(e) => {
+                        tracing::error!(error = %e, "the world cannot be reloaded; writes are refused until restart");
+                        *self.failed.lock().unwrap_or_else(|p| p.into_inner()) =
+                            Some(format!("storage failed and could not recover: {e}"));
+                    }
+                }
+            }
+        }
+    }
+
+    /// A snapshot of the world now, made once per write and kept for later readers.
+    fn snapshot(&mut self) -> Arc<World> {
+        let mut latest = self.latest.lock().unwrap_or_else(|p| p.into_inner());
+        latest
+            .get_or_insert_with(|| Arc::new(self.world.clone()))
+            .clone()
     }
 }

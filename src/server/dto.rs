@@ -275,6 +275,18 @@ pub enum EulerOp {
     },
 }
 
+impl EulerOp {
+    /// The face a gluing operator names in a second (possibly other) body.
+    pub fn second_face(&self) -> Option<u64> {
+        match *self {
+            EulerOp::Glue { face2, .. }
+            | EulerOp::Gluee { face2, .. }
+            | EulerOp::Glueff { face2, .. } => Some(face2),
+            _ => None,
+        }
+    }
+}
+
 /// What to move in `POST /v1/bodies/{id}/transform`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(tag = "op", rename_all = "snake_case")]

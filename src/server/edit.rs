@@ -108,6 +108,27 @@ pub enum Edit {
     },
 }
 
+impl Edit {
+    /// The edit's kind, as written in its `edit` tag (`create_body`, `euler`, ...).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Edit::CreateBody(_) => "create_body",
+            Edit::PatchBody { .. } => "patch_body",
+            Edit::DeleteBody { .. } => "delete_body",
+            Edit::Euler { .. } => "euler",
+            Edit::Transform { .. } => "transform",
+            Edit::Sweep { .. } => "sweep",
+            Edit::Dual { .. } => "dual",
+            Edit::Evert { .. } => "evert",
+            Edit::Copy { .. } => "copy",
+            Edit::PutCamera { .. } => "put_camera",
+            Edit::DeleteCamera { .. } => "delete_camera",
+            Edit::PutLight { .. } => "put_light",
+            Edit::DeleteLight { .. } => "delete_light",
+        }
+    }
+}
+
 /// What an applied edit made or changed, by id.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Default)]
 pub struct Outcome {

@@ -1,52 +1,184 @@
-//! The server: the actor that owns the world, and the HTTP/JSON API in front of it.
+//! The server: the owner of the world, the journal that makes its writes durable, the
+//! change feed, and the HTTP/JSON API in front of them.
 //!
 //! ```text
-//! HTTP request ─> api (parse, validate, map errors)
-//!                  │ writes: Edit ─mpsc─> actor (single owner of the World) ─> reply + revision
+//! HTTP request ─> api (auth, limits, parse, validate, map errors)
+//!                  │ writes: Edit ─mpsc─> actor (single owner of the World)
+//!                  │                        ├ applies, journals the group in one commit
+//!                  │                        └ acknowledges, publishes Changes to the feed
 //!                  └ reads: actor hands out Arc<World> snapshots; heavy reads run on them
 //!                          in spawn_blocking
 //! ```
 
 pub mod actor;
 pub mod api;
+pub mod changes;
 pub mod demo;
 pub mod dto;
 pub mod edit;
+pub mod events;
 pub mod problem;
 pub mod spec;
 
 use std::net::SocketAddr;
+use std::sync::Arc;
+use std::time::Duration;
 
 use axum::Router;
+use axum::extract::{Request, State};
+use axum::middleware::{self, Next};
+use axum::response::{IntoResponse, Response};
 use tokio::net::TcpListener;
+use tokio::sync::Semaphore;
 use tower_http::trace::{DefaultMakeSpan, DefaultOnResponse, TraceLayer};
 use tracing::Level;
 
 use crate::model::World;
+use actor::{ActorConfig, Journal, Observer, Unobserved};
+use changes::Change;
+use events::Feed;
+use problem::Problem;
 
-/// The full application: the API router over a fresh actor owning `world`, with one log
-/// line per request.
-pub fn app(world: World) -> Router {
+/// Limits that keep one client, or many, from exhausting the server.
+#[derive(Debug, Clone, Copy)]
+pub struct Limits {
+    /// The largest request body, in bytes.
+    pub max_request_bytes: usize,
+    /// How long a request may take before it is answered 503 (the change stream is not
+    /// bounded by it once its headers are sent).
+    pub request_timeout: Duration,
+    /// Requests handled at once; more are answered 503 with `Retry-After` at once.
+    pub max_in_flight: usize,
+    /// The world owner's queue and group-commit size.
+    pub actor: ActorConfig,
+    /// Changes kept in memory for `GET /v1/world/changes` and stream catch-up.
+    pub history: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_request_bytes: api::MAX_REQUEST_BYTES,
+            request_timeout: Duration::from_secs(60),
+            max_in_flight: 4096,
+            actor: ActorConfig::default(),
+            history: 100_000,
+        }
+    }
+}
+
+/// A built application: the router and the feed its event streams follow.
+pub struct App {
+    /// The HTTP routes with every layer.
+    pub router: Router,
+    /// The change feed (closed at shutdown so event streams end).
+    pub feed: Arc<Feed>,
+}
+
+/// Builds the application over `world`, made durable by `journal`, with `recent`
+/// changes (oldest first, ending at the world's revision) as the initial history.
+pub fn build<J: Journal>(
+    world: World,
+    journal: J,
+    recent: Vec<Change>,
+    limits: Limits,
+    observer: Arc<dyn Observer>,
+) -> std::io::Result<App> {
+    let feed = Feed::new(limits.history, world.revision(), recent);
+    let handle = actor::spawn(world, journal, feed.clone(), observer, limits.actor)?;
+    let state = api::AppState {
+        handle,
+        feed: feed.clone(),
+    };
     let one_line_per_request = TraceLayer::new_for_http()
         .make_span_with(DefaultMakeSpan::new().level(Level::INFO))
         .on_request(())
         .on_response(DefaultOnResponse::new().level(Level::INFO))
         .on_body_chunk(())
         .on_eos(());
-    api::router(actor::spawn(world)).layer(one_line_per_request)
+    let in_flight = Arc::new(Semaphore::new(limits.max_in_flight.max(1)));
+    let router = api::router(state, limits.max_request_bytes)
+        .layer(middleware::from_fn_with_state(
+            limits.request_timeout,
+            time_limit,
+        ))
+        .layer(middleware::from_fn_with_state(in_flight, shed_load))
+        .layer(one_line_per_request);
+    Ok(App { router, feed })
 }
 
-/// Binds `addr` and serves `world` until `shutdown` resolves; in-flight requests finish
-/// first. Returns the bound address through `bound` as soon as it is listening.
+/// The application over `world` held in memory only, with default limits.
+pub fn app(world: World) -> Router {
+    build(
+        world,
+        actor::InMemory,
+        Vec::new(),
+        Limits::default(),
+        Arc::new(Unobserved),
+    )
+    .expect("the world's owner thread starts")
+    .router
+}
+
+/// Answers 503 with `Retry-After` at once when `max_in_flight` requests are already
+/// being handled, so a flood cannot grow memory without bound.
+async fn shed_load(State(permits): State<Arc<Semaphore>>, req: Request, next: Next) -> Response {
+    match permits.try_acquire_owned() {
+        Ok(permit) => {
+            let res = next.run(req).await;
+            drop(permit);
+            res
+        }
+        Err(_) => Problem::busy("too many requests are in flight; try again shortly", 1)
+            .into_response(),
+    }
+}
+
+/// Answers 503 when a request takes longer than the limit.
+async fn time_limit(State(limit): State<Duration>, req: Request, next: Next) -> Response {
+    let is_write = !matches!(
+        *req.method(),
+        axum::http::Method::GET | axum::http::Method::HEAD
+    );
+    match tokio::time::timeout(limit, next.run(req)).await {
+        Ok(res) => res,
+        Err(_) => {
+            let detail = if is_write {
+                format!(
+                    "no answer within {} s; the write may still be applied: see /v1/world/changes",
+                    limit.as_secs_f64()
+                )
+            } else {
+                format!("no answer within {} s", limit.as_secs_f64())
+            };
+            Problem::new(
+                axum::http::StatusCode::SERVICE_UNAVAILABLE,
+                "timeout",
+                "Request timed out",
+                detail,
+            )
+            .retry_after(1)
+            .into_response()
+        }
+    }
+}
+
+/// Binds `addr` and serves `app` until `shutdown` resolves; event streams end and
+/// in-flight requests finish first. Returns the bound address through `bound` as soon as
+/// it is listening.
 pub async fn serve(
     addr: SocketAddr,
-    world: World,
+    app: App,
     bound: impl FnOnce(SocketAddr),
     shutdown: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
     let listener = TcpListener::bind(addr).await?;
     bound(listener.local_addr()?);
-    axum::serve(listener, app(world))
-        .with_graceful_shutdown(shutdown)
+    let feed = app.feed.clone();
+    axum::serve(listener, app.router)
+        .with_graceful_shutdown(async move {
+            shutdown.await;
+            feed.close();
+        })
         .await
 }

@@ -6,6 +6,7 @@ use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::Serialize;
 
+use super::actor::WriteError;
 use super::edit::EditError;
 use crate::model::WorldError;
 
@@ -20,6 +21,10 @@ pub struct Problem {
     pub title: &'static str,
     /// What exactly went wrong.
     pub detail: String,
+    /// Seconds after which the client may try again (`Retry-After`), for 503s.
+    pub retry_after: Option<u64>,
+    /// The world's revision, for answers where it matters (412).
+    pub revision: Option<u64>,
 }
 
 #[derive(Serialize)]
@@ -29,6 +34,8 @@ struct Body<'a> {
     title: &'a str,
     status: u16,
     detail: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    revision: Option<u64>,
 }
 
 impl Problem {
@@ -44,7 +51,32 @@ impl Problem {
             kind,
             title,
             detail: detail.into(),
+            retry_after: None,
+            revision: None,
         }
+    }
+
+    /// The same problem, telling the client to retry after `seconds`.
+    pub fn retry_after(mut self, seconds: u64) -> Self {
+        self.retry_after = Some(seconds);
+        self
+    }
+
+    /// The same problem, carrying the world's revision.
+    pub fn with_revision(mut self, revision: u64) -> Self {
+        self.revision = Some(revision);
+        self
+    }
+
+    /// 503: the server is saturated; try again after `seconds`.
+    pub fn busy(detail: impl Into<String>, seconds: u64) -> Self {
+        Self::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            "overloaded",
+            "Server overloaded",
+            detail,
+        )
+        .retry_after(seconds)
     }
 
     /// 400: the request is not well-formed.
@@ -70,6 +102,7 @@ impl Problem {
             "Service unavailable",
             "the world is shutting down",
         )
+        .retry_after(5)
     }
 }
 
@@ -80,12 +113,16 @@ impl IntoResponse for Problem {
             title: self.title,
             status: self.status.as_u16(),
             detail: &self.detail,
+            revision: self.revision,
         };
         let mut res = (self.status, Json(body)).into_response();
         res.headers_mut().insert(
             header::CONTENT_TYPE,
             HeaderValue::from_static("application/problem+json"),
         );
+        if let Some(s) = self.retry_after {
+            res.headers_mut().insert(header::RETRY_AFTER, HeaderValue::from(s));
+        }
         res
     }
 }
@@ -169,6 +206,31 @@ fn world_problem(w: WorldError, detail: String) -> Problem {
         }
         WorldError::BadName { .. } | WorldError::Pose(_) | WorldError::NonFinite { .. } => {
             Problem::bad_request(detail)
+        }
+    }
+}
+
+impl From<WriteError> for Problem {
+    fn from(e: WriteError) -> Self {
+        let detail = e.to_string();
+        match e {
+            WriteError::Refused(e) => e.into(),
+            WriteError::Conflict { actual, .. } => Problem::new(
+                StatusCode::PRECONDITION_FAILED,
+                "revision-moved",
+                "The world has moved on",
+                detail,
+            )
+            .with_revision(actual),
+            WriteError::Storage(_) => Problem::new(
+                StatusCode::SERVICE_UNAVAILABLE,
+                "storage-failed",
+                "Storage failed",
+                detail,
+            )
+            .retry_after(5),
+            WriteError::Busy(_) => Problem::busy(detail, 1),
+            WriteError::Stopped => Problem::unavailable(),
         }
     }
 }

@@ -3,9 +3,10 @@
 //! Reads every `.route("PATH", get(h).post(h2)...)` call and returns one
 //! `(METHOD, PATH)` pair per method-router function (`get`, `post`, `put`, `patch`,
 //! `delete`, `head`, `options`, `trace`) called at the top level of the second
-//! argument. Anything it does not understand (`.route_service`, `.nest`, `.merge`,
-//! `any(..)`, a path that is not a string literal) is an error rather than a route
-//! silently missed.
+//! argument. The route-role markers `reads(..)`, `writes(..)`, `admin(..)` and a method
+//! router's `.merge(..)` are looked through. Anything it does not understand
+//! (`.route_service`, `.nest`, a router's `.merge`, `any(..)`, a path that is not a
+//! string literal) is an error rather than a route silently missed.
 
 const METHODS: &[&str] = &[
     "get", "post", "put", "patch", "delete", "head", "options", "trace",
@@ -14,7 +15,7 @@ const METHODS: &[&str] = &[
 /// `(METHOD, PATH)` for every route in `source`, in order of appearance.
 pub fn routes(source: &str) -> Result<Vec<(String, String)>, String> {
     let code = strip_comments(source);
-    for unsupported in [".route_service(", ".nest(", ".nest_service(", ".merge("] {
+    for unsupported in [".route_service(", ".nest(", ".nest_service("] {
         if code.contains(unsupported) {
             return Err(format!(
                 "the router uses {unsupported}..); teach tests/contract_support/routes.rs \
@@ -23,6 +24,7 @@ pub fn routes(source: &str) -> Result<Vec<(String, String)>, String> {
         }
     }
     let mut out = Vec::new();
+    let mut merges = 0;
     let mut rest = code.as_str();
     while let Some(i) = rest.find(".route(") {
         rest = &rest[i + ".route(".len()..];
@@ -31,11 +33,8 @@ pub fn routes(source: &str) -> Result<Vec<(String, String)>, String> {
         let after = after
             .strip_prefix(',')
             .ok_or_else(|| format!("expected ',' after the path {path:?}"))?;
-        let (methods, tail) = top_level_calls(after)?;
-        let methods: Vec<String> = methods
-            .into_iter()
-            .filter(|m| m != "layer" && m != "with_state")
-            .collect();
+        let (calls, tail) = top_level_calls(after)?;
+        let methods = method_names(calls, &mut merges)?;
         if methods.is_empty() {
             return Err(format!("no method router found for {path:?}"));
         }
@@ -49,6 +48,31 @@ pub fn routes(source: &str) -> Result<Vec<(String, String)>, String> {
             out.push((m.to_uppercase(), path.clone()));
         }
         rest = tail;
+    }
+    if code.matches(".merge(").count() != merges {
+        return Err("the router merges routers (.merge outside a .route call); teach \
+                    tests/contract_support/routes.rs to read it"
+            .into());
+    }
+    Ok(out)
+}
+
+/// The method-router functions among `calls`, looking through role markers and
+/// `.merge(..)` (counted in `merges`).
+fn method_names(calls: Vec<(String, String)>, merges: &mut usize) -> Result<Vec<String>, String> {
+    let mut out = Vec::new();
+    for (name, arg) in calls {
+        match name.as_str() {
+            "layer" | "route_layer" | "with_state" => {}
+            "reads" | "writes" | "admin" | "merge" => {
+                if name == "merge" {
+                    *merges += 1;
+                }
+                let (inner, _) = top_level_calls(&format!("{arg})"))?;
+                out.extend(method_names(inner, merges)?);
+            }
+            _ => out.push(name),
+        }
     }
     Ok(out)
 }
@@ -108,11 +132,12 @@ fn string_literal(s: &str) -> Result<(String, &str), String> {
     Ok((lit.to_string(), &body[end + 1..]))
 }
 
-/// The names of functions and methods called at depth 0 of `s`, up to the `)` that
-/// closes the enclosing call; and the text after that `)`.
-fn top_level_calls(s: &str) -> Result<(Vec<String>, &str), String> {
+/// The functions and methods called at depth 0 of `s`, each with its argument text, up
+/// to the `)` that closes the enclosing call; and the text after that `)`.
+fn top_level_calls(s: &str) -> Result<(Vec<(String, String)>, &str), String> {
     let mut depth = 0usize;
-    let mut calls = Vec::new();
+    let mut calls: Vec<(String, String)> = Vec::new();
+    let mut open_at = 0usize;
     let mut ident = String::new();
     let mut last_ident = String::new();
     let mut in_str = false;
@@ -137,7 +162,8 @@ fn top_level_calls(s: &str) -> Result<(Vec<String>, &str), String> {
             '"' => in_str = true,
             '(' | '[' | '{' => {
                 if c == '(' && depth == 0 && !last_ident.is_empty() {
-                    calls.push(last_ident.clone());
+                    calls.push((last_ident.clone(), String::new()));
+                    open_at = i + 1;
                 }
                 depth += 1;
             }
@@ -146,6 +172,12 @@ fn top_level_calls(s: &str) -> Result<(Vec<String>, &str), String> {
                     return Ok((calls, &s[i + 1..]));
                 }
                 depth -= 1;
+                if depth == 0
+                    && c == ')'
+                    && let Some(last) = calls.last_mut()
+                {
+                    last.1 = s[open_at..i].to_string();
+                }
             }
             c if c.is_whitespace() => continue,
             _ => {}
@@ -173,6 +205,7 @@ mod tests {
                     get(b).patch(h::patch_b).delete(del),
                 )
                 .route("/c", axum::routing::post(c).layer(DefaultBodyLimit::max(f(1))))
+                .route("/e", reads(get(e)).merge(writes(put(e2).delete(e3))))
                 /* .route("/d", put(d)) */
                 .fallback(nf)
         "#;
@@ -183,6 +216,9 @@ mod tests {
             ("PATCH", "/b/{id}"),
             ("DELETE", "/b/{id}"),
             ("POST", "/c"),
+            ("GET", "/e"),
+            ("PUT", "/e"),
+            ("DELETE", "/e"),
         ];
         assert_eq!(
             r,
@@ -196,5 +232,6 @@ mod tests {
         assert!(routes(r#".route(PATH, get(h))"#).is_err());
         assert!(routes(r#".nest("/v2", other())"#).is_err());
         assert!(routes(r#".route("/a", get(h)"#).is_err());
+        assert!(routes(r#".route("/a", get(h)).merge(other)"#).is_err());
     }
 }

@@ -29,9 +29,20 @@ impl TestServer {
                 .enable_all()
                 .build()
                 .expect("a tokio runtime");
+            let app = rt
+                .block_on(async {
+                    winged::server::build(
+                        world,
+                        winged::server::actor::InMemory,
+                        Vec::new(),
+                        winged::server::Limits::default(),
+                        std::sync::Arc::new(winged::server::actor::Unobserved),
+                    )
+                })
+                .expect("the world's owner starts");
             let served = rt.block_on(winged::server::serve(
                 "127.0.0.1:0".parse().expect("an address"),
-                world,
+                app,
                 move |addr| {
                     let _ = bound_tx.send(addr);
                 },

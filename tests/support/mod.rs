@@ -35,9 +35,17 @@ impl TestServer {
                 .build()
                 .expect("a tokio runtime");
             rt.block_on(async move {
+                let app = winged::server::build(
+                    world,
+                    winged::server::actor::InMemory,
+                    Vec::new(),
+                    winged::server::Limits::default(),
+                    std::sync::Arc::new(winged::server::actor::Unobserved),
+                )
+                .expect("the world's owner starts");
                 winged::server::serve(
                     "127.0.0.1:0".parse().unwrap(),
-                    world,
+                    app,
                     move |a| {
                         let _ = addr_tx.send(a);
                     },

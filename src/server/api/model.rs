@@ -1,95 +1,23 @@
-//! The HTTP surface: routes, request parsing and answers. Writes become [`Edit`]s sent to
-//! the actor; reads work on a snapshot.
+//! The model's routes: bodies, their topology and operators, cameras and lights.
 
-use std::sync::Arc;
-
+use axum::Json;
 use axum::extract::rejection::{JsonRejection, PathRejection, QueryRejection};
-use axum::extract::{DefaultBodyLimit, Extension, Path, Query, State};
+use axum::extract::{Extension, Path, Query, State};
 use axum::http::StatusCode;
-use axum::response::{IntoResponse, Response};
-use axum::routing::{get, post};
-use axum::{Json, Router};
-use serde::{Deserialize, Serialize};
+use axum::response::IntoResponse;
+use serde::Deserialize;
 use serde_json::json;
 
-use super::actor::{Applied, Handle};
-use super::dto::{
+use super::precondition::{IfMatch, WriteJson};
+use super::{Answer, HeavyReads, read_answer, snapshot, write};
+use crate::model::{BodyId, Serial, World};
+use crate::server::actor::Handle;
+use crate::server::dto::{
     BodyDto, CameraDto, CameraReq, CopyReq, CreateBody, EdgeDto, EulerOp, FaceDto, LightDto,
     PatchBody, SweepReq, TopologyDto, TransformReq, VertexDto, euler_of,
 };
-use super::edit::{Edit, Outcome};
-use super::problem::Problem;
-use crate::model::{BodyId, Serial, World};
-
-/// The largest request body accepted, in bytes (a polyhedron upload is the big one).
-pub const MAX_REQUEST_BYTES: usize = 64 * 1024 * 1024;
-
-/// The router over a running actor.
-pub fn router(handle: Handle) -> Router {
-    Router::new()
-        .route("/healthz", get(healthz))
-        .route("/openapi.json", get(openapi))
-        .route("/v1/world", get(world))
-        .route("/v1/bodies", get(list_bodies).post(create_body))
-        .route(
-            "/v1/bodies/{id}",
-            get(get_body).patch(patch_body).delete(delete_body),
-        )
-        .route("/v1/bodies/{id}/topology", get(topology))
-        .route("/v1/bodies/{id}/euler", post(euler))
-        .route("/v1/bodies/{id}/transform", post(transform))
-        .route("/v1/bodies/{id}/sweep", post(sweep))
-        .route("/v1/bodies/{id}/dual", post(dual))
-        .route("/v1/bodies/{id}/evert", post(evert))
-        .route("/v1/bodies/{id}/copy", post(copy))
-        .route("/v1/cameras", get(list_cameras))
-        .route(
-            "/v1/cameras/{name}",
-            get(get_camera).put(put_camera).delete(delete_camera),
-        )
-        .route("/v1/lights", get(list_lights))
-        .route(
-            "/v1/lights/{name}",
-            get(get_light).put(put_light).delete(delete_light),
-        )
-        .fallback(not_found)
-        .layer(Extension(HeavyReads::for_this_machine()))
-        .layer(DefaultBodyLimit::max(MAX_REQUEST_BYTES))
-        .with_state(handle)
-}
-
-type Answer = Result<Response, Problem>;
-
-/// The gate heavy reads (topology dumps) pass: one permit per core but one, at least one.
-#[derive(Clone)]
-struct HeavyReads(Arc<tokio::sync::Semaphore>);
-
-impl HeavyReads {
-    fn for_this_machine() -> Self {
-        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
-        HeavyReads(Arc::new(tokio::sync::Semaphore::new(
-            cores.saturating_sub(1).max(1),
-        )))
-    }
-}
-
-/// A write's answer: the outcome's fields and the revision.
-#[derive(Serialize)]
-struct Written {
-    #[serde(flatten)]
-    outcome: Outcome,
-    revision: u64,
-}
-
-async fn write(h: &Handle, edit: Edit, status: StatusCode) -> Answer {
-    let Applied { outcome, revision } =
-        h.apply(edit).await.map_err(|_| Problem::unavailable())??;
-    Ok((status, Json(Written { outcome, revision })).into_response())
-}
-
-async fn snapshot(h: &Handle) -> Result<Arc<World>, Problem> {
-    h.snapshot().await.map_err(|_| Problem::unavailable())
-}
+use crate::server::edit::Edit;
+use crate::server::problem::Problem;
 
 fn id_of(p: Result<Path<u64>, PathRejection>) -> Result<u64, Problem> {
     p.map(|Path(id)| id).map_err(Problem::from)
@@ -99,28 +27,7 @@ fn name_of(p: Result<Path<String>, PathRejection>) -> Result<String, Problem> {
     p.map(|Path(n)| n).map_err(Problem::from)
 }
 
-fn json_of<T>(j: Result<Json<T>, JsonRejection>) -> Result<T, Problem> {
-    j.map(|Json(t)| t).map_err(Problem::from)
-}
-
-async fn not_found() -> Problem {
-    Problem::not_found("no such route; see /openapi.json")
-}
-
-async fn healthz(State(h): State<Handle>) -> Answer {
-    let w = snapshot(&h).await?;
-    Ok(Json(json!({"status": "ok", "revision": w.revision()})).into_response())
-}
-
-async fn openapi() -> Response {
-    (
-        [(axum::http::header::CONTENT_TYPE, "application/json")],
-        super::spec::openapi_json(),
-    )
-        .into_response()
-}
-
-async fn world(State(h): State<Handle>) -> Answer {
+pub(super) async fn world(State(h): State<Handle>) -> Answer {
     let w = snapshot(&h).await?;
     let (mut f, mut e, mut v) = (0, 0, 0);
     for (_, node) in w.bodies() {
@@ -128,7 +35,9 @@ async fn world(State(h): State<Handle>) -> Answer {
         e += node.body.edge_count();
         v += node.body.vertex_count();
     }
-    Ok(Json(json!({
+    Ok(read_answer(
+        w.revision(),
+        json!({
         "revision": w.revision(),
         "bodies": w.body_count(),
         "faces": f,
@@ -136,8 +45,8 @@ async fn world(State(h): State<Handle>) -> Answer {
         "vertices": v,
         "cameras": w.cameras().count(),
         "lights": w.lights().count(),
-    }))
-    .into_response())
+        }),
+    ))
 }
 
 fn body_dto(w: &World, b: BodyId) -> Option<BodyDto> {
@@ -159,12 +68,12 @@ fn body_dto(w: &World, b: BodyId) -> Option<BodyDto> {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ListQuery {
+pub(super) struct ListQuery {
     name: Option<String>,
     parent: Option<u64>,
 }
 
-async fn list_bodies(
+pub(super) async fn list_bodies(
     State(h): State<Handle>,
     q: Result<Query<ListQuery>, QueryRejection>,
 ) -> Answer {
@@ -188,20 +97,23 @@ async fn list_bodies(
             e.to_string(),
         )
     })?;
-    Ok(Json(json!({ "bodies": bodies, "revision": revision })).into_response())
+    Ok(read_answer(
+        revision,
+        json!({ "bodies": bodies, "revision": revision }),
+    ))
 }
 
-async fn get_body(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) -> Answer {
+pub(super) async fn get_body(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) -> Answer {
     let id = id_of(id)?;
     let w = snapshot(&h).await?;
     let dto = body_dto(&w, BodyId(Serial(id)))
         .ok_or_else(|| Problem::not_found(format!("no body has id {id}")))?;
     let mut v = serde_json::to_value(dto).map_err(|e| Problem::bad_request(e.to_string()))?;
     v["revision"] = json!(w.revision());
-    Ok(Json(v).into_response())
+    Ok(read_answer(w.revision(), v))
 }
 
-async fn topology(
+pub(super) async fn topology(
     State(h): State<Handle>,
     Extension(heavy): Extension<HeavyReads>,
     id: Result<Path<u64>, PathRejection>,
@@ -306,106 +218,123 @@ fn topology_dto(w: &World, b: BodyId) -> TopologyDto {
     }
 }
 
-async fn create_body(
+pub(super) async fn create_body(
     State(h): State<Handle>,
-    req: Result<Json<CreateBody>, JsonRejection>,
+    req: WriteJson<CreateBody>,
 ) -> Answer {
-    write(&h, Edit::CreateBody(json_of(req)?), StatusCode::CREATED).await
+    let edit = Edit::CreateBody(req.value);
+    write(&h, edit, req.expected, StatusCode::CREATED).await
 }
 
-async fn patch_body(
+pub(super) async fn patch_body(
     State(h): State<Handle>,
     id: Result<Path<u64>, PathRejection>,
-    req: Result<Json<PatchBody>, JsonRejection>,
+    req: WriteJson<PatchBody>,
 ) -> Answer {
-    let (body, patch) = (id_of(id)?, json_of(req)?);
-    write(&h, Edit::PatchBody { body, patch }, StatusCode::OK).await
+    let (body, patch, expected) = (id_of(id)?, req.value, req.expected);
+    write(&h, Edit::PatchBody { body, patch }, expected, StatusCode::OK).await
 }
 
-async fn delete_body(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) -> Answer {
-    write(&h, Edit::DeleteBody { body: id_of(id)? }, StatusCode::OK).await
+pub(super) async fn delete_body(
+    State(h): State<Handle>,
+    IfMatch(expected): IfMatch,
+    id: Result<Path<u64>, PathRejection>,
+) -> Answer {
+    write(&h, Edit::DeleteBody { body: id_of(id)? }, expected, StatusCode::OK).await
 }
 
-async fn euler(
+pub(super) async fn euler(
     State(h): State<Handle>,
     id: Result<Path<u64>, PathRejection>,
-    req: Result<Json<EulerOp>, JsonRejection>,
+    req: WriteJson<EulerOp>,
 ) -> Answer {
-    let (body, op) = (id_of(id)?, json_of(req)?);
-    write(&h, Edit::Euler { body, op }, StatusCode::OK).await
+    let (body, op, expected) = (id_of(id)?, req.value, req.expected);
+    write(&h, Edit::Euler { body, op }, expected, StatusCode::OK).await
 }
 
-async fn transform(
+pub(super) async fn transform(
     State(h): State<Handle>,
     id: Result<Path<u64>, PathRejection>,
-    req: Result<Json<TransformReq>, JsonRejection>,
+    req: WriteJson<TransformReq>,
 ) -> Answer {
-    let (body, req) = (id_of(id)?, json_of(req)?);
-    write(&h, Edit::Transform { body, req }, StatusCode::OK).await
+    let (body, req, expected) = (id_of(id)?, req.value, req.expected);
+    write(&h, Edit::Transform { body, req }, expected, StatusCode::OK).await
 }
 
-async fn sweep(
+pub(super) async fn sweep(
     State(h): State<Handle>,
     id: Result<Path<u64>, PathRejection>,
-    req: Result<Json<SweepReq>, JsonRejection>,
+    req: WriteJson<SweepReq>,
 ) -> Answer {
-    let (body, req) = (id_of(id)?, json_of(req)?);
-    write(&h, Edit::Sweep { body, req }, StatusCode::OK).await
+    let (body, req, expected) = (id_of(id)?, req.value, req.expected);
+    write(&h, Edit::Sweep { body, req }, expected, StatusCode::OK).await
 }
 
-async fn dual(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) -> Answer {
-    write(&h, Edit::Dual { body: id_of(id)? }, StatusCode::OK).await
-}
-
-async fn evert(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) -> Answer {
-    write(&h, Edit::Evert { body: id_of(id)? }, StatusCode::OK).await
-}
-
-async fn copy(
+pub(super) async fn dual(
     State(h): State<Handle>,
+    IfMatch(expected): IfMatch,
+    id: Result<Path<u64>, PathRejection>,
+) -> Answer {
+    write(&h, Edit::Dual { body: id_of(id)? }, expected, StatusCode::OK).await
+}
+
+pub(super) async fn evert(
+    State(h): State<Handle>,
+    IfMatch(expected): IfMatch,
+    id: Result<Path<u64>, PathRejection>,
+) -> Answer {
+    write(&h, Edit::Evert { body: id_of(id)? }, expected, StatusCode::OK).await
+}
+
+pub(super) async fn copy(
+    State(h): State<Handle>,
+    IfMatch(expected): IfMatch,
     id: Result<Path<u64>, PathRejection>,
     req: Result<Option<Json<CopyReq>>, JsonRejection>,
 ) -> Answer {
     let body = id_of(id)?;
     // The body is optional: none (no Content-Type) means an unnamed copy.
     let name = req?.and_then(|Json(r)| r.name);
-    write(&h, Edit::Copy { body, name }, StatusCode::CREATED).await
+    write(&h, Edit::Copy { body, name }, expected, StatusCode::CREATED).await
 }
 
-async fn list_cameras(State(h): State<Handle>) -> Answer {
+pub(super) async fn list_cameras(State(h): State<Handle>) -> Answer {
     let w = snapshot(&h).await?;
     let cams: Vec<CameraDto> = w.cameras().map(|(n, c)| CameraDto::new(n, c)).collect();
-    Ok(Json(json!({ "cameras": cams, "revision": w.revision() })).into_response())
+    Ok(read_answer(
+        w.revision(),
+        json!({ "cameras": cams, "revision": w.revision() }),
+    ))
 }
 
-async fn get_camera(State(h): State<Handle>, name: Result<Path<String>, PathRejection>) -> Answer {
+pub(super) async fn get_camera(State(h): State<Handle>, name: Result<Path<String>, PathRejection>) -> Answer {
     let name = name_of(name)?;
     let w = snapshot(&h).await?;
     let c = w
         .camera(&name)
         .ok_or_else(|| Problem::not_found(format!("no camera is named {:?}", name)))?;
-    Ok(Json(CameraDto::new(&name, c)).into_response())
+    Ok(read_answer(w.revision(), CameraDto::new(&name, c)))
 }
 
-async fn put_camera(
+pub(super) async fn put_camera(
     State(h): State<Handle>,
     name: Result<Path<String>, PathRejection>,
-    req: Result<Json<CameraReq>, JsonRejection>,
+    req: WriteJson<CameraReq>,
 ) -> Answer {
-    let name = name_of(name)?;
-    let camera = json_of(req)?;
-    write(&h, Edit::PutCamera { name, camera }, StatusCode::OK).await
+    let (name, camera) = (name_of(name)?, req.value);
+    write(&h, Edit::PutCamera { name, camera }, req.expected, StatusCode::OK).await
 }
 
-async fn delete_camera(
+pub(super) async fn delete_camera(
     State(h): State<Handle>,
+    IfMatch(expected): IfMatch,
     name: Result<Path<String>, PathRejection>,
 ) -> Answer {
     let name = name_of(name)?;
-    write(&h, Edit::DeleteCamera { name }, StatusCode::OK).await
+    write(&h, Edit::DeleteCamera { name }, expected, StatusCode::OK).await
 }
 
-async fn list_lights(State(h): State<Handle>) -> Answer {
+pub(super) async fn list_lights(State(h): State<Handle>) -> Answer {
     let w = snapshot(&h).await?;
     let lights: Vec<serde_json::Value> = w
         .lights()
@@ -415,10 +344,13 @@ async fn list_lights(State(h): State<Handle>) -> Answer {
             v
         })
         .collect();
-    Ok(Json(json!({ "lights": lights, "revision": w.revision() })).into_response())
+    Ok(read_answer(
+        w.revision(),
+        json!({ "lights": lights, "revision": w.revision() }),
+    ))
 }
 
-async fn get_light(State(h): State<Handle>, name: Result<Path<String>, PathRejection>) -> Answer {
+pub(super) async fn get_light(State(h): State<Handle>, name: Result<Path<String>, PathRejection>) -> Answer {
     let name = name_of(name)?;
     let w = snapshot(&h).await?;
     let l = w
@@ -426,23 +358,23 @@ async fn get_light(State(h): State<Handle>, name: Result<Path<String>, PathRejec
         .ok_or_else(|| Problem::not_found(format!("no light is named {:?}", name)))?;
     let mut v = serde_json::to_value(LightDto::from(l)).unwrap_or_default();
     v["name"] = json!(name);
-    Ok(Json(v).into_response())
+    Ok(read_answer(w.revision(), v))
 }
 
-async fn put_light(
+pub(super) async fn put_light(
     State(h): State<Handle>,
     name: Result<Path<String>, PathRejection>,
-    req: Result<Json<LightDto>, JsonRejection>,
+    req: WriteJson<LightDto>,
 ) -> Answer {
-    let name = name_of(name)?;
-    let light = json_of(req)?;
-    write(&h, Edit::PutLight { name, light }, StatusCode::OK).await
+    let (name, light) = (name_of(name)?, req.value);
+    write(&h, Edit::PutLight { name, light }, req.expected, StatusCode::OK).await
 }
 
-async fn delete_light(
+pub(super) async fn delete_light(
     State(h): State<Handle>,
+    IfMatch(expected): IfMatch,
     name: Result<Path<String>, PathRejection>,
 ) -> Answer {
     let name = name_of(name)?;
-    write(&h, Edit::DeleteLight { name }, StatusCode::OK).await
+    write(&h, Edit::DeleteLight { name }, expected, StatusCode::OK).await
 }

