@@ -74,15 +74,8 @@ fn serve(addr: SocketAddr, data: Option<PathBuf>, demo: bool) -> ExitCode {
         }
     };
     let bodies = world.body_count();
-    let app = match runtime.block_on(async {
-        server::build(
-            world,
-            server::actor::InMemory,
-            Vec::new(),
-            server::Limits::default(),
-            std::sync::Arc::new(server::actor::Unobserved),
-        )
-    }) {
+    let app = match runtime.block_on(async { server::in_memory(world, server::Limits::default()) })
+    {
         Ok(a) => a,
         Err(e) => {
             eprintln!("winged: cannot start the world's owner: {e}");

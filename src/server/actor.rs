@@ -165,11 +165,7 @@ type Failure = Arc<Mutex<Option<String>>>;
 impl Handle {
     /// Applies `edit` if the world's revision is `expected` (any revision when `None`),
     /// and answers once it is durable.
-    pub async fn apply_if(
-        &self,
-        edit: Edit,
-        expected: Option<u64>,
-    ) -> Result<Applied, WriteError> {
+    pub async fn apply_if(&self, edit: Edit, expected: Option<u64>) -> Result<Applied, WriteError> {
         let (reply, rx) = oneshot::channel();
         let cmd = Command::Apply {
             edit: Box::new(edit),
@@ -194,7 +190,12 @@ impl Handle {
 
     /// A snapshot of the world as of the last durable write.
     pub async fn snapshot(&self) -> Result<Arc<World>, Stopped> {
-        if let Some(w) = self.latest.lock().unwrap_or_else(|p| p.into_inner()).clone() {
+        if let Some(w) = self
+            .latest
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clone()
+        {
             return Ok(w);
         }
         let (reply, rx) = oneshot::channel();
@@ -401,10 +402,7 @@ impl<J: Journal> Owner<J> {
     /// if the journal fails, refuses them all and goes back to the durable world.
     fn commit(&mut self, pending: Vec<Pending>) {
         // Readers must not see these writes before they are durable.
-        self.latest
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .take();
+        self.latest.lock().unwrap_or_else(|p| p.into_inner()).take();
         let started = Instant::now();
         let entries: Vec<Entry<'_>> = pending
             .iter()
@@ -435,10 +433,7 @@ impl<J: Journal> Owner<J> {
                 }
                 match self.journal.reload() {
                     Ok(world) => {
-                        tracing::warn!(
-                            revision = world.revision(),
-                            "world reloaded from storage"
-                        );
+                        tracing::warn!(revision = world.revision(), "world reloaded from storage");
                         self.feed.reset_revision(world.revision());
                         self.world = world;
                     }

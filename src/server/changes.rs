@@ -187,7 +187,10 @@ pub fn describe(
         Edit::CreateBody(_) | Edit::Copy { .. } => {
             if let Some(id) = outcome.id {
                 changes.push(EntityChange::body(Added, id, &[]));
-                parts_of(&mut changes, after.supart(BodyId(Serial(id))).map(|s| s.get()));
+                parts_of(
+                    &mut changes,
+                    after.supart(BodyId(Serial(id))).map(|s| s.get()),
+                );
             }
         }
         Edit::PatchBody { body, patch } => {
@@ -235,7 +238,10 @@ pub fn describe(
             }
             if let Some(s) = outcome.split_off {
                 changes.push(EntityChange::body(Added, s, &[]));
-                parts_of(&mut changes, after.supart(BodyId(Serial(s))).map(|p| p.get()));
+                parts_of(
+                    &mut changes,
+                    after.supart(BodyId(Serial(s))).map(|p| p.get()),
+                );
             }
         }
         Edit::Transform { body, req } => {

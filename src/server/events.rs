@@ -301,7 +301,13 @@ mod tests {
         // Only 12, 13, 14 are kept.
         assert_eq!(revisions(&feed.since(11, 100)), vec![12, 13, 14]);
         assert_eq!(revisions(&feed.since(13, 100)), vec![14]);
-        assert!(matches!(feed.since(10, 100), Since::Resync { oldest: Some(12), .. }));
+        assert!(matches!(
+            feed.since(10, 100),
+            Since::Resync {
+                oldest: Some(12),
+                ..
+            }
+        ));
         // Ahead of the world: resync too.
         assert!(matches!(feed.since(15, 100), Since::Resync { .. }));
         match feed.since(11, 2) {

@@ -107,17 +107,15 @@ pub fn build<J: Journal>(
     Ok(App { router, feed })
 }
 
-/// The application over `world` held in memory only, with default limits.
-pub fn app(world: World) -> Router {
+/// The application over `world` held in memory only (nothing survives a restart).
+pub fn in_memory(world: World, limits: Limits) -> std::io::Result<App> {
     build(
         world,
         actor::InMemory,
         Vec::new(),
-        Limits::default(),
+        limits,
         Arc::new(Unobserved),
     )
-    .expect("the world's owner thread starts")
-    .router
 }
 
 /// Answers 503 with `Retry-After` at once when `max_in_flight` requests are already
@@ -129,8 +127,9 @@ async fn shed_load(State(permits): State<Arc<Semaphore>>, req: Request, next: Ne
             drop(permit);
             res
         }
-        Err(_) => Problem::busy("too many requests are in flight; try again shortly", 1)
-            .into_response(),
+        Err(_) => {
+            Problem::busy("too many requests are in flight; try again shortly", 1).into_response()
+        }
     }
 }
 

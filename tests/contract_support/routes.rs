@@ -50,9 +50,11 @@ pub fn routes(source: &str) -> Result<Vec<(String, String)>, String> {
         rest = tail;
     }
     if code.matches(".merge(").count() != merges {
-        return Err("the router merges routers (.merge outside a .route call); teach \
+        return Err(
+            "the router merges routers (.merge outside a .route call); teach \
                     tests/contract_support/routes.rs to read it"
-            .into());
+                .into(),
+        );
     }
     Ok(out)
 }

@@ -31,13 +31,7 @@ impl TestServer {
                 .expect("a tokio runtime");
             let app = rt
                 .block_on(async {
-                    winged::server::build(
-                        world,
-                        winged::server::actor::InMemory,
-                        Vec::new(),
-                        winged::server::Limits::default(),
-                        std::sync::Arc::new(winged::server::actor::Unobserved),
-                    )
+                    winged::server::in_memory(world, winged::server::Limits::default())
                 })
                 .expect("the world's owner starts");
             let served = rt.block_on(winged::server::serve(

@@ -26,6 +26,18 @@ impl TestServer {
 
     /// Serves `world` on 127.0.0.1 with an ephemeral port.
     pub fn with_world(world: World) -> Self {
+        Self::with_limits(world, winged::server::Limits::default())
+    }
+
+    /// Serves `world`, in memory, under `limits`.
+    pub fn with_limits(world: World, limits: winged::server::Limits) -> Self {
+        Self::with_app(move || {
+            winged::server::in_memory(world, limits).expect("the world's owner starts")
+        })
+    }
+
+    /// Serves the application `make` builds (called on the server's runtime).
+    pub fn with_app(make: impl FnOnce() -> winged::server::App + Send + 'static) -> Self {
         let (addr_tx, addr_rx) = mpsc::channel::<SocketAddr>();
         let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
         let thread = std::thread::spawn(move || {
@@ -35,14 +47,7 @@ impl TestServer {
                 .build()
                 .expect("a tokio runtime");
             rt.block_on(async move {
-                let app = winged::server::build(
-                    world,
-                    winged::server::actor::InMemory,
-                    Vec::new(),
-                    winged::server::Limits::default(),
-                    std::sync::Arc::new(winged::server::actor::Unobserved),
-                )
-                .expect("the world's owner starts");
+                let app = make();
                 winged::server::serve(
                     "127.0.0.1:0".parse().unwrap(),
                     app,

@@ -87,9 +87,7 @@ pub(super) async fn events(
             v.to_str()
                 .ok()
                 .and_then(|t| t.trim().parse::<u64>().ok())
-                .ok_or_else(|| {
-                    Problem::bad_request("Last-Event-ID must be a revision number")
-                })?,
+                .ok_or_else(|| Problem::bad_request("Last-Event-ID must be a revision number"))?,
         ),
     };
     let last = last_event.or(q.since).unwrap_or_else(|| feed.revision());

@@ -83,9 +83,8 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         )
         .route(
             "/v1/bodies/{id}",
-            reads(get(get_body)).merge(writes(
-                axum::routing::patch(patch_body).delete(delete_body),
-            )),
+            reads(get(get_body))
+                .merge(writes(axum::routing::patch(patch_body).delete(delete_body))),
         )
         .route("/v1/bodies/{id}/topology", reads(get(topology)))
         .route("/v1/bodies/{id}/euler", writes(post(euler)))
@@ -97,15 +96,13 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         .route("/v1/cameras", reads(get(list_cameras)))
         .route(
             "/v1/cameras/{name}",
-            reads(get(get_camera)).merge(writes(
-                axum::routing::put(put_camera).delete(delete_camera),
-            )),
+            reads(get(get_camera))
+                .merge(writes(axum::routing::put(put_camera).delete(delete_camera))),
         )
         .route("/v1/lights", reads(get(list_lights)))
         .route(
             "/v1/lights/{name}",
-            reads(get(get_light))
-                .merge(writes(axum::routing::put(put_light).delete(delete_light))),
+            reads(get(get_light)).merge(writes(axum::routing::put(put_light).delete(delete_light))),
         )
         .fallback(not_found)
         .layer(axum::extract::Extension(HeavyReads::for_this_machine()))

@@ -103,7 +103,10 @@ pub(super) async fn list_bodies(
     ))
 }
 
-pub(super) async fn get_body(State(h): State<Handle>, id: Result<Path<u64>, PathRejection>) -> Answer {
+pub(super) async fn get_body(
+    State(h): State<Handle>,
+    id: Result<Path<u64>, PathRejection>,
+) -> Answer {
     let id = id_of(id)?;
     let w = snapshot(&h).await?;
     let dto = body_dto(&w, BodyId(Serial(id)))
@@ -218,10 +221,7 @@ fn topology_dto(w: &World, b: BodyId) -> TopologyDto {
     }
 }
 
-pub(super) async fn create_body(
-    State(h): State<Handle>,
-    req: WriteJson<CreateBody>,
-) -> Answer {
+pub(super) async fn create_body(State(h): State<Handle>, req: WriteJson<CreateBody>) -> Answer {
     let edit = Edit::CreateBody(req.value);
     write(&h, edit, req.expected, StatusCode::CREATED).await
 }
@@ -232,7 +232,13 @@ pub(super) async fn patch_body(
     req: WriteJson<PatchBody>,
 ) -> Answer {
     let (body, patch, expected) = (id_of(id)?, req.value, req.expected);
-    write(&h, Edit::PatchBody { body, patch }, expected, StatusCode::OK).await
+    write(
+        &h,
+        Edit::PatchBody { body, patch },
+        expected,
+        StatusCode::OK,
+    )
+    .await
 }
 
 pub(super) async fn delete_body(
@@ -240,7 +246,13 @@ pub(super) async fn delete_body(
     IfMatch(expected): IfMatch,
     id: Result<Path<u64>, PathRejection>,
 ) -> Answer {
-    write(&h, Edit::DeleteBody { body: id_of(id)? }, expected, StatusCode::OK).await
+    write(
+        &h,
+        Edit::DeleteBody { body: id_of(id)? },
+        expected,
+        StatusCode::OK,
+    )
+    .await
 }
 
 pub(super) async fn euler(
@@ -275,7 +287,13 @@ pub(super) async fn dual(
     IfMatch(expected): IfMatch,
     id: Result<Path<u64>, PathRejection>,
 ) -> Answer {
-    write(&h, Edit::Dual { body: id_of(id)? }, expected, StatusCode::OK).await
+    write(
+        &h,
+        Edit::Dual { body: id_of(id)? },
+        expected,
+        StatusCode::OK,
+    )
+    .await
 }
 
 pub(super) async fn evert(
@@ -283,7 +301,13 @@ pub(super) async fn evert(
     IfMatch(expected): IfMatch,
     id: Result<Path<u64>, PathRejection>,
 ) -> Answer {
-    write(&h, Edit::Evert { body: id_of(id)? }, expected, StatusCode::OK).await
+    write(
+        &h,
+        Edit::Evert { body: id_of(id)? },
+        expected,
+        StatusCode::OK,
+    )
+    .await
 }
 
 pub(super) async fn copy(
@@ -307,7 +331,10 @@ pub(super) async fn list_cameras(State(h): State<Handle>) -> Answer {
     ))
 }
 
-pub(super) async fn get_camera(State(h): State<Handle>, name: Result<Path<String>, PathRejection>) -> Answer {
+pub(super) async fn get_camera(
+    State(h): State<Handle>,
+    name: Result<Path<String>, PathRejection>,
+) -> Answer {
     let name = name_of(name)?;
     let w = snapshot(&h).await?;
     let c = w
@@ -322,7 +349,13 @@ pub(super) async fn put_camera(
     req: WriteJson<CameraReq>,
 ) -> Answer {
     let (name, camera) = (name_of(name)?, req.value);
-    write(&h, Edit::PutCamera { name, camera }, req.expected, StatusCode::OK).await
+    write(
+        &h,
+        Edit::PutCamera { name, camera },
+        req.expected,
+        StatusCode::OK,
+    )
+    .await
 }
 
 pub(super) async fn delete_camera(
@@ -350,7 +383,10 @@ pub(super) async fn list_lights(State(h): State<Handle>) -> Answer {
     ))
 }
 
-pub(super) async fn get_light(State(h): State<Handle>, name: Result<Path<String>, PathRejection>) -> Answer {
+pub(super) async fn get_light(
+    State(h): State<Handle>,
+    name: Result<Path<String>, PathRejection>,
+) -> Answer {
     let name = name_of(name)?;
     let w = snapshot(&h).await?;
     let l = w
@@ -367,7 +403,13 @@ pub(super) async fn put_light(
     req: WriteJson<LightDto>,
 ) -> Answer {
     let (name, light) = (name_of(name)?, req.value);
-    write(&h, Edit::PutLight { name, light }, req.expected, StatusCode::OK).await
+    write(
+        &h,
+        Edit::PutLight { name, light },
+        req.expected,
+        StatusCode::OK,
+    )
+    .await
 }
 
 pub(super) async fn delete_light(

@@ -1,12 +1,12 @@
 //! Routes for operators: liveness, readiness and the API description.
 
+use axum::Json;
 use axum::extract::State;
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
-use axum::Json;
 use serde_json::json;
 
-use super::{AppState, Answer, snapshot};
+use super::{Answer, AppState, snapshot};
 use crate::server::problem::Problem;
 
 /// How long readiness waits for the world's owner to answer.
@@ -29,12 +29,7 @@ pub(super) async fn readyz(State(s): State<AppState>) -> Answer {
     }
     let w = tokio::time::timeout(READY_WAIT, snapshot(&s.handle))
         .await
-        .map_err(|_| {
-            Problem::busy(
-                "the world's owner did not answer within 2 s",
-                1,
-            )
-        })??;
+        .map_err(|_| Problem::busy("the world's owner did not answer within 2 s", 1))??;
     Ok(Json(json!({
         "status": "ready",
         "revision": w.revision(),
