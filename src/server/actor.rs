@@ -60,22 +60,68 @@ pub trait Journal: Send + 'static {
     /// The world as durable, after an append failed (its edits are dropped).
     fn reload(&mut self) -> Result<World, Self::Error>;
 
+    /// Whether appends reach storage (false for [`InMemory`]).
+    fn is_durable(&self) -> bool {
+        true
+    }
+
+    /// Writes a snapshot of `world` now (for a backup).
+    fn checkpoint(&mut self, world: &World) -> Result<Checkpoint, Self::Error>;
+
     /// Called once when the owner stops, with the final world.
     fn close(&mut self, world: &World);
+}
+
+/// A snapshot written on request.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Checkpoint {
+    /// The world revision it holds.
+    pub revision: u64,
+    /// Its file.
+    pub path: Option<String>,
+    /// Its size.
+    pub bytes: u64,
+    /// Time taken.
+    pub seconds: f64,
+}
+
+/// Why a checkpoint was not written.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    /// The server keeps its world in memory only.
+    #[error("the world is held in memory only (the server was started with --memory)")]
+    InMemory,
+    /// The snapshot could not be written.
+    #[error("the snapshot could not be written: {0}")]
+    Storage(String),
+    /// The owner is gone.
+    #[error("the world's owner has stopped")]
+    Stopped,
 }
 
 /// No durability: the world lives in memory only.
 #[derive(Debug, Default, Clone, Copy)]
 pub struct InMemory;
 
+/// [`InMemory`] has nowhere to write a snapshot.
+#[derive(Debug, Clone, Copy, thiserror::Error)]
+#[error("the world is held in memory only")]
+pub struct NoStorage;
+
 impl Journal for InMemory {
-    type Error = std::convert::Infallible;
+    type Error = NoStorage;
+    fn is_durable(&self) -> bool {
+        false
+    }
     fn append(&mut self, _: &[Entry<'_>]) -> Result<(), Self::Error> {
         Ok(())
     }
     fn committed(&mut self, _: &World) {}
     fn reload(&mut self) -> Result<World, Self::Error> {
-        unreachable!("an in-memory journal never fails an append")
+        Err(NoStorage)
+    }
+    fn checkpoint(&mut self, _: &World) -> Result<Checkpoint, Self::Error> {
+        Err(NoStorage)
     }
     fn close(&mut self, _: &World) {}
 }
@@ -86,6 +132,8 @@ pub trait Observer: Send + Sync + 'static {
     fn committed(&self, elapsed: Duration, entries: usize);
     /// A write was refused because the queue was full.
     fn overloaded(&self);
+    /// A snapshot of `bytes` was written in `elapsed`.
+    fn snapshotted(&self, _elapsed: Duration, _bytes: u64) {}
 }
 
 /// An observer that ignores everything.
@@ -106,6 +154,10 @@ enum Command {
     },
     /// Answer with a snapshot of the world.
     Snapshot { reply: oneshot::Sender<Arc<World>> },
+    /// Write a snapshot file of the world now.
+    Checkpoint {
+        reply: oneshot::Sender<Result<Checkpoint, CheckpointError>>,
+    },
 }
 
 /// An applied edit's outcome and the world revision after it.
@@ -204,6 +256,16 @@ impl Handle {
             .await
             .map_err(|_| Stopped)?;
         rx.await.map_err(|_| Stopped)
+    }
+
+    /// Writes a snapshot file of the durable world now, waiting its turn in the queue.
+    pub async fn checkpoint(&self) -> Result<Checkpoint, CheckpointError> {
+        let (reply, rx) = oneshot::channel();
+        self.tx
+            .send(Command::Checkpoint { reply })
+            .await
+            .map_err(|_| CheckpointError::Stopped)?;
+        rx.await.map_err(|_| CheckpointError::Stopped)?
     }
 
     /// Requests waiting for the owner now.
@@ -330,6 +392,7 @@ impl<J: Journal> Owner<J> {
     fn handle(&mut self, batch: &mut Vec<Command>) {
         let mut pending: Vec<Pending> = Vec::new();
         let mut readers = Vec::new();
+        let mut checkpoints = Vec::new();
         for cmd in batch.drain(..) {
             match cmd {
                 Command::Apply {
@@ -342,6 +405,7 @@ impl<J: Journal> Owner<J> {
                     }
                 }
                 Command::Snapshot { reply } => readers.push(reply),
+                Command::Checkpoint { reply } => checkpoints.push(reply),
             }
         }
         if !pending.is_empty() {
@@ -352,6 +416,16 @@ impl<J: Journal> Owner<J> {
             for r in readers {
                 let _ = r.send(snap.clone());
             }
+        }
+        for reply in checkpoints {
+            let result = self.journal.checkpoint(&self.world).map_err(|e| {
+                if !self.journal.is_durable() {
+                    CheckpointError::InMemory
+                } else {
+                    CheckpointError::Storage(e.to_string())
+                }
+            });
+            let _ = reply.send(result);
         }
     }
 

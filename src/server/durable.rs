@@ -1,0 +1,214 @@
+//! The world's owner's journal on disk: a [`Store`] (SQLite journal plus snapshot
+//! files), with snapshots written in the background every so many revisions and the
+//! journal pruned behind them.
+//!
+//! Recovery ([`open`]) loads the newest snapshot, replays the journal after it, and
+//! reads back the recent changes so `GET /v1/world/changes` keeps working across a
+//! restart.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, TryRecvError};
+use std::time::Instant;
+
+use super::actor::{Checkpoint, Entry, Journal, Observer};
+use super::changes::{self, Change};
+use crate::model::World;
+use crate::store::{SnapshotWritten, Store, StoreError, StoreOptions};
+
+/// When snapshots are taken and how much journal is kept behind them.
+#[derive(Debug, Clone, Copy)]
+pub struct SnapshotPolicy {
+    /// Revisions between background snapshots.
+    pub every: u64,
+    /// Journal entries kept behind the oldest snapshot, so recent changes can still be
+    /// listed after a restart.
+    pub keep: u64,
+}
+
+impl Default for SnapshotPolicy {
+    fn default() -> Self {
+        SnapshotPolicy {
+            every: 100_000,
+            keep: 100_000,
+        }
+    }
+}
+
+/// A [`Journal`] backed by a data directory.
+pub struct Durable {
+    store: Store,
+    policy: SnapshotPolicy,
+    /// The revision of the newest snapshot written (or being written).
+    last_snapshot: u64,
+    /// A background snapshot's result, while one is being written.
+    writing: Option<Receiver<Result<SnapshotWritten, StoreError>>>,
+    observer: Arc<dyn Observer>,
+}
+
+/// A recovered data directory, ready to serve.
+pub struct Opened {
+    /// The journal for the world's owner.
+    pub journal: Durable,
+    /// The world as of the last durable write.
+    pub world: World,
+    /// The most recent changes, oldest first, ending at the world's revision.
+    pub recent: Vec<Change>,
+}
+
+/// Opens data directory `dir`, seeding a fresh one with `seed()` (written as its first
+/// snapshot), and recovers the world from it.
+///
+/// `history` is how many recent changes to read back for the change feed.
+pub fn open(
+    dir: &Path,
+    options: StoreOptions,
+    policy: SnapshotPolicy,
+    history: usize,
+    observer: Arc<dyn Observer>,
+    seed: impl FnOnce() -> Option<World>,
+) -> Result<Opened, StoreError> {
+    let mut store = Store::open(dir, options)?;
+    if store.is_fresh()?
+        && let Some(world) = seed()
+    {
+        let w = store.write_snapshot(&world)?;
+        tracing::info!(revision = w.revision, path = %w.path.display(), "seeded a fresh data directory");
+    }
+    let mut recent: std::collections::VecDeque<Change> = std::collections::VecDeque::new();
+    let recovered = store.recover(|revision, edit, outcome, world| {
+        // Replayed entries carry no pre-image; describe them from the world after.
+        let change = changes::describe(revision, edit, outcome, &changes::Before::default(), world);
+        if recent.len() == history.max(1) {
+            recent.pop_front();
+        }
+        recent.push_back(change);
+    })?;
+    let last_snapshot = recovered.snapshot.unwrap_or(0);
+    Ok(Opened {
+        journal: Durable {
+            store,
+            policy,
+            last_snapshot,
+            writing: None,
+            observer,
+        },
+        world: recovered.world,
+        recent: recent.into(),
+    })
+}
+
+impl Durable {
+    /// Collects a finished background snapshot and prunes the journal behind it.
+    fn collect(&mut self) {
+        let Some(rx) = &self.writing else { return };
+        let result = match rx.try_recv() {
+            Ok(r) => r,
+            Err(TryRecvError::Empty) => return,
+            Err(TryRecvError::Disconnected) => {
+                self.writing = None;
+                tracing::error!("the snapshot writer stopped without a result");
+                return;
+            }
+        };
+        self.writing = None;
+        match result {
+            Ok(w) => self.written(&w),
+            Err(e) => tracing::error!(error = %e, "snapshot failed; the journal is kept whole"),
+        }
+    }
+
+    /// Notes a written snapshot and prunes the journal behind the oldest one kept.
+    fn written(&mut self, w: &SnapshotWritten) {
+        self.observer.snapshotted(w.duration, w.bytes);
+        tracing::info!(
+            revision = w.revision,
+            bytes = w.bytes,
+            seconds = w.duration.as_secs_f64(),
+            "snapshot written"
+        );
+        let through = w.oldest_kept.saturating_sub(self.policy.keep);
+        if through > 0 {
+            match self.store.prune_through(through) {
+                Ok(n) if n > 0 => tracing::info!(through, entries = n, "journal pruned"),
+                Ok(_) => {}
+                Err(e) => tracing::warn!(error = %e, "journal pruning failed; will retry"),
+            }
+        }
+    }
+}
+
+impl Journal for Durable {
+    type Error = StoreError;
+
+    fn append(&mut self, entries: &[Entry<'_>]) -> Result<(), StoreError> {
+        let batch: Vec<(u64, &super::edit::Edit)> =
+            entries.iter().map(|e| (e.revision, e.edit)).collect();
+        self.store.append(&batch)
+    }
+
+    fn committed(&mut self, world: &World) {
+        self.collect();
+        let due = world.revision() >= self.last_snapshot.saturating_add(self.policy.every);
+        if !due || self.writing.is_some() {
+            return;
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        let dir = self.store.dir().to_owned();
+        // Copies the parts tree and shares the bodies: later writes copy what they change.
+        let world = Arc::new(world.clone());
+        self.last_snapshot = world.revision();
+        let spawned = std::thread::Builder::new()
+            .name("snapshot".into())
+            .spawn(move || {
+                let _ = tx.send(crate::store::write_snapshot(&dir, &world));
+            });
+        match spawned {
+            Ok(_) => self.writing = Some(rx),
+            Err(e) => tracing::error!(error = %e, "cannot start the snapshot writer"),
+        }
+    }
+
+    fn reload(&mut self) -> Result<World, StoreError> {
+        // A background snapshot holds only durable state; let it finish first.
+        if let Some(rx) = self.writing.take()
+            && let Ok(Ok(w)) = rx.recv()
+        {
+            self.written(&w);
+        }
+        Ok(self.store.recover(|_, _, _, _| {})?.world)
+    }
+
+    fn checkpoint(&mut self, world: &World) -> Result<Checkpoint, StoreError> {
+        if let Some(rx) = self.writing.take()
+            && let Ok(Ok(w)) = rx.recv()
+        {
+            self.written(&w);
+        }
+        let started = Instant::now();
+        let w = self.store.write_snapshot(world)?;
+        self.last_snapshot = w.revision;
+        self.written(&w);
+        Ok(Checkpoint {
+            revision: w.revision,
+            path: Some(w.path.display().to_string()),
+            bytes: w.bytes,
+            seconds: started.elapsed().as_secs_f64(),
+        })
+    }
+
+    fn close(&mut self, world: &World) {
+        if let Some(rx) = self.writing.take()
+            && let Ok(Ok(w)) = rx.recv()
+        {
+            self.written(&w);
+        }
+        if world.revision() > self.last_snapshot {
+            // The next start then loads one file instead of replaying the journal.
+            match self.store.write_snapshot(world) {
+                Ok(w) => self.written(&w),
+                Err(e) => tracing::error!(error = %e, "final snapshot failed; the journal is whole"),
+            }
+        }
+    }
+}
