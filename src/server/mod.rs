@@ -9,6 +9,7 @@
 
 pub mod actor;
 pub mod api;
+pub mod auth;
 pub mod demo;
 pub mod dto;
 pub mod edit;
