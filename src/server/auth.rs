@@ -486,8 +486,10 @@ fn unauthorized(detail: &'static str, challenge: &'static str) -> Response {
         detail,
     )
     .into_response();
-    res.headers_mut()
-        .insert(header::WWW_AUTHENTICATE, HeaderValue::from_static(challenge));
+    res.headers_mut().insert(
+        header::WWW_AUTHENTICATE,
+        HeaderValue::from_static(challenge),
+    );
     res
 }
 
@@ -518,7 +520,11 @@ mod tests {
     #[test]
     fn tokens_from_every_source() {
         let mut file = tempfile::NamedTempFile::new().unwrap();
-        writeln!(file, "# operators\n\nadmin   root-token\n  write:w:with:colons  ").unwrap();
+        writeln!(
+            file,
+            "# operators\n\nadmin   root-token\n  write:w:with:colons  "
+        )
+        .unwrap();
         let t = Tokens::from_sources(
             &["read:r1".to_string()],
             Some("read:r2, write:w2,,"),
@@ -559,7 +565,11 @@ mod tests {
         let mut file = tempfile::NamedTempFile::new().unwrap();
         writeln!(file, "read a\n# fine\nwrite b c").unwrap();
         let e = Tokens::from_sources(&[], None, Some(file.path())).unwrap_err();
-        assert!(e.to_string().ends_with("line 3: whitespace inside the token"), "{e}");
+        assert!(
+            e.to_string()
+                .ends_with("line 3: whitespace inside the token"),
+            "{e}"
+        );
         let missing = file.path().with_extension("absent");
         let e = Tokens::from_sources(&[], None, Some(&missing)).unwrap_err();
         assert!(matches!(e, AuthError::Io { .. }), "{e}");
@@ -620,12 +630,13 @@ mod tests {
 
         fn app(tokens: Tokens) -> Router {
             let tokens = Arc::new(tokens);
-            let admin = Router::new()
-                .route("/admin", post(whoami))
-                .route_layer(from_fn_with_state(
-                    Guard::new(tokens.clone(), Role::Admin),
-                    guard,
-                ));
+            let admin =
+                Router::new()
+                    .route("/admin", post(whoami))
+                    .route_layer(from_fn_with_state(
+                        Guard::new(tokens.clone(), Role::Admin),
+                        guard,
+                    ));
             Router::new()
                 .route("/thing", get(whoami).post(whoami))
                 .route_layer(from_fn_with_state(tokens, guard_by_method))
@@ -747,12 +758,18 @@ mod tests {
                 let body: Value = serde_json::from_str(&x.body).unwrap();
                 assert_eq!(body["type"], "urn:winged:problem:forbidden");
                 let detail = body["detail"].as_str().unwrap();
-                assert!(detail.contains(&format!("needs the {need} role")), "{detail}");
+                assert!(
+                    detail.contains(&format!("needs the {need} role")),
+                    "{detail}"
+                );
                 assert!(detail.contains(&format!("holds {holds}")), "{detail}");
             }
             let unknown: Value = serde_json::from_str(&a[3].body).unwrap();
             assert_eq!(unknown["status"], 401);
-            assert_eq!(a[3].content_type.as_deref(), Some("application/problem+json"));
+            assert_eq!(
+                a[3].content_type.as_deref(),
+                Some("application/problem+json")
+            );
         }
     }
 }
