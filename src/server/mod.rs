@@ -13,6 +13,7 @@ pub mod auth;
 pub mod demo;
 pub mod dto;
 pub mod edit;
+pub mod limits;
 pub mod metrics;
 pub mod problem;
 pub mod spec;
