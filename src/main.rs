@@ -4,11 +4,19 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
-use tracing::info;
+use std::sync::Arc;
+use std::time::Duration;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use tracing::{error, info, warn};
 use winged::model::solids::{cylinder, mkcube, mktetra, sphere, torus};
 use winged::model::{Body, Serials, World, check_solid};
-use winged::server;
+use winged::server::actor::{ActorConfig, InMemory};
+use winged::server::auth::{Tokens, check_bind};
+use winged::server::durable::{self, SnapshotPolicy};
+use winged::server::metrics::Metrics;
+use winged::server::{self, Limits, Options};
+use winged::store::{Durability, Store, StoreOptions};
 
 /// A networked world model of Baumgart's winged-edge polyhedra.
 #[derive(Parser)]
@@ -21,71 +29,184 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Serve the world over HTTP/JSON.
-    Serve {
-        /// Address to listen on.
-        #[arg(long, default_value = "127.0.0.1:7878")]
-        addr: SocketAddr,
-        /// Directory for the world's data (reserved for persistence; the world is
-        /// currently held in memory only).
+    Serve(Box<ServeArgs>),
+    /// Validate a data directory offline (every body of the recovered world), or with
+    /// no --data, build the seeds' example solids through the Euler operators and
+    /// validate them.
+    Check {
+        /// The data directory to check (the server must not be running on it).
         #[arg(long)]
         data: Option<PathBuf>,
-        /// Start with the demo scene: the hand-eye table with blocks, a camera and a sun.
-        #[arg(long)]
-        demo: bool,
     },
-    /// Build the seeds' example solids through the Euler operators and validate them.
-    Check,
+}
+
+#[derive(Args)]
+struct ServeArgs {
+    /// Address to listen on. Without tokens only loopback addresses are allowed.
+    #[arg(long, default_value = "127.0.0.1:7878")]
+    addr: SocketAddr,
+    /// Directory holding the world: the journal (journal.db, SQLite) and snapshots.
+    #[arg(long, default_value = "winged-data", conflicts_with = "memory")]
+    data: PathBuf,
+    /// Keep the world in memory only: nothing survives a restart.
+    #[arg(long)]
+    memory: bool,
+    /// Start a fresh data directory (or a --memory world) with the demo scene: the
+    /// hand-eye table with blocks, a camera and a sun.
+    #[arg(long)]
+    demo: bool,
+    /// `full`: a write is acknowledged once it is on disk (fsync). `normal`: once it is
+    /// safe from a crash of the server; a power loss may take the last writes.
+    #[arg(long, value_enum, default_value = "full")]
+    durability: DurabilityArg,
+    /// Revisions between background snapshots.
+    #[arg(long, default_value_t = 100_000)]
+    snapshot_every: u64,
+    /// A bearer token, as ROLE:TOKEN with ROLE read, write or admin (repeatable).
+    /// Prefer --tokens-file or WINGED_TOKENS: flags show in the process list.
+    #[arg(long = "token", value_name = "ROLE:TOKEN")]
+    tokens: Vec<String>,
+    /// A file of tokens, one `ROLE TOKEN` per line (# comments allowed).
+    #[arg(long, env = "WINGED_TOKENS_FILE", value_name = "FILE")]
+    tokens_file: Option<PathBuf>,
+    /// Serve a non-loopback address without tokens: anyone who can reach it may
+    /// change the world.
+    #[arg(long)]
+    insecure: bool,
+    /// The largest request body, in MiB.
+    #[arg(long, default_value_t = 64)]
+    max_body_mib: usize,
+    /// Seconds a request may take before it is answered 503.
+    #[arg(long, default_value_t = 60)]
+    request_timeout: u64,
+    /// Requests handled at once; more are answered 503 with Retry-After.
+    #[arg(long, default_value_t = 4096)]
+    max_in_flight: usize,
+    /// Requests that may wait for the world's owner; more writes are answered 503.
+    #[arg(long, default_value_t = 1024)]
+    queue: usize,
+    /// Changes kept for GET /v1/world/changes and event-stream catch-up.
+    #[arg(long, default_value_t = 100_000)]
+    history: usize,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum DurabilityArg {
+    Full,
+    Normal,
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Serve { addr, data, demo } => serve(addr, data, demo),
-        Command::Check => check(),
+        Command::Serve(args) => serve(*args),
+        Command::Check { data: None } => check(),
+        Command::Check { data: Some(dir) } => check_data(&dir),
     }
 }
 
-fn serve(addr: SocketAddr, data: Option<PathBuf>, demo: bool) -> ExitCode {
+fn fail(what: impl std::fmt::Display) -> ExitCode {
+    eprintln!("winged: {what}");
+    ExitCode::FAILURE
+}
+
+fn serve(args: ServeArgs) -> ExitCode {
     tracing_subscriber::fmt()
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stdout()))
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
         )
         .init();
-    if let Some(dir) = &data {
-        tracing::warn!(dir = %dir.display(), "--data is accepted but the world is not yet persisted");
+    let env_tokens = std::env::var("WINGED_TOKENS").ok();
+    let tokens = match Tokens::from_sources(
+        &args.tokens,
+        env_tokens.as_deref(),
+        args.tokens_file.as_deref(),
+    ) {
+        Ok(t) => Arc::new(t),
+        Err(e) => return fail(e),
+    };
+    if let Err(e) = check_bind(&args.addr, &tokens, args.insecure) {
+        return fail(e);
     }
-    let world = if demo {
-        match server::demo::demo_world() {
-            Ok(w) => w,
-            Err(e) => {
-                eprintln!("winged: the demo scene failed to build: {e}");
-                return ExitCode::FAILURE;
-            }
-        }
-    } else {
-        World::new()
+    if tokens.is_empty() && !args.addr.ip().is_loopback() {
+        warn!(addr = %args.addr, "serving without tokens on a non-loopback address (--insecure)");
+    }
+    let limits = Limits {
+        max_request_bytes: args.max_body_mib.saturating_mul(1024 * 1024),
+        request_timeout: Duration::from_secs(args.request_timeout.max(1)),
+        max_in_flight: args.max_in_flight,
+        actor: ActorConfig {
+            queue: args.queue,
+            ..ActorConfig::default()
+        },
+        history: args.history,
+    };
+    let options = Options {
+        limits,
+        tokens: tokens.clone(),
+        metrics: Arc::new(Metrics::new()),
     };
     let runtime = match tokio::runtime::Runtime::new() {
         Ok(r) => r,
-        Err(e) => {
-            eprintln!("winged: cannot start the runtime: {e}");
-            return ExitCode::FAILURE;
+        Err(e) => return fail(format!("cannot start the runtime: {e}")),
+    };
+    let demo = args.demo;
+    let seed = move || -> Option<World> {
+        if !demo {
+            return None;
+        }
+        match server::demo::demo_world() {
+            Ok(w) => Some(w),
+            Err(e) => {
+                error!(error = %e, "the demo scene failed to build; starting empty");
+                None
+            }
         }
     };
-    let bodies = world.body_count();
-    let app = match runtime.block_on(async { server::in_memory(world, server::Limits::default()) })
-    {
+    let built = if args.memory {
+        let world = seed().unwrap_or_default();
+        info!("the world is held in memory only (--memory): nothing survives a restart");
+        runtime.block_on(async { server::build(world, InMemory, Vec::new(), options) })
+    } else {
+        let store_options = StoreOptions {
+            durability: match args.durability {
+                DurabilityArg::Full => Durability::Full,
+                DurabilityArg::Normal => Durability::Normal,
+            },
+            ..StoreOptions::default()
+        };
+        let policy = SnapshotPolicy {
+            every: args.snapshot_every.max(1),
+            keep: args.history as u64,
+        };
+        info!(dir = %args.data.display(), "opening the data directory");
+        let opened = match durable::open(
+            &args.data,
+            store_options,
+            policy,
+            args.history,
+            options.metrics.clone(),
+            seed,
+        ) {
+            Ok(o) => o,
+            Err(e) => return fail(format!("cannot open {}: {e}", args.data.display())),
+        };
+        runtime.block_on(async {
+            server::build(opened.world, opened.journal, opened.recent, options)
+        })
+    };
+    let app = match built {
         Ok(a) => a,
-        Err(e) => {
-            eprintln!("winged: cannot start the world's owner: {e}");
-            return ExitCode::FAILURE;
-        }
+        Err(e) => return fail(format!("cannot start the world's owner: {e}")),
     };
+    let roles = tokens.len();
     let result = runtime.block_on(server::serve(
-        addr,
+        args.addr,
         app,
-        |bound| info!(%bound, bodies, "winged is listening; try: curl http://{bound}/v1/world"),
+        |bound| {
+            info!(%bound, tokens = roles, "winged is listening; try: curl http://{bound}/v1/world")
+        },
         shutdown_signal(),
     ));
     match result {
@@ -93,10 +214,7 @@ fn serve(addr: SocketAddr, data: Option<PathBuf>, demo: bool) -> ExitCode {
             info!("stopped");
             ExitCode::SUCCESS
         }
-        Err(e) => {
-            eprintln!("winged: cannot serve on {addr}: {e}");
-            ExitCode::FAILURE
-        }
+        Err(e) => fail(format!("cannot serve on {}: {e}", args.addr)),
     }
 }
 
@@ -164,5 +282,43 @@ fn check() -> ExitCode {
         ExitCode::FAILURE
     } else {
         ExitCode::SUCCESS
+    }
+}
+
+/// Recovers the world in data directory `dir` and validates every body.
+fn check_data(dir: &std::path::Path) -> ExitCode {
+    if !dir.exists() {
+        return fail(format!("{} does not exist", dir.display()));
+    }
+    let mut store = match Store::open(dir, StoreOptions::default()) {
+        Ok(s) => s,
+        Err(e) => return fail(format!("cannot open {}: {e}", dir.display())),
+    };
+    let recovered = match store.recover(|_, _, _, _| {}) {
+        Ok(r) => r,
+        Err(e) => return fail(format!("cannot recover {}: {e}", dir.display())),
+    };
+    let world = recovered.world;
+    let mut bad = 0;
+    for (id, node) in world.bodies() {
+        let report = winged::model::check_topology(&node.body);
+        if !report.is_ok() {
+            bad += 1;
+            println!("body {}: {report}", id.get());
+        }
+    }
+    println!(
+        "revision {}: {} bodies, {} invalid; snapshot {:?}, {} journal entries replayed in {:.3} s",
+        world.revision(),
+        world.body_count(),
+        bad,
+        recovered.snapshot,
+        recovered.replayed,
+        recovered.elapsed.as_secs_f64()
+    );
+    if bad == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
     }
 }

@@ -228,10 +228,15 @@ fn the_contract_is_well_formed() {
                 if !r["description"].is_string() {
                     problems.push(format!("{at} {code}: no description"));
                 }
-                let want_media = if code.starts_with('2') {
-                    "application/json"
-                } else {
+                // Answers are JSON, except the metrics text and the event stream.
+                let want_media = if !code.starts_with('2') {
                     "application/problem+json"
+                } else if at.contains("/metrics") {
+                    "application/openmetrics-text"
+                } else if at.contains("/v1/world/events") {
+                    "text/event-stream"
+                } else {
+                    "application/json"
                 };
                 let media: Vec<&String> = r["content"]
                     .as_object()
@@ -333,7 +338,12 @@ impl Contract {
                         content.keys().collect::<Vec<_>>()
                     )
                 });
-                let body = reply.json();
+                // Text answers (metrics, an event stream) are checked as one string.
+                let body = if reply.media_type.ends_with("json") {
+                    reply.json()
+                } else {
+                    Value::String(reply.text.clone())
+                };
                 if let Err(e) = self.v().validate(&media["schema"], &body) {
                     panic!("the answer does not match its schema:\n{e}\n{what}");
                 }
@@ -361,7 +371,7 @@ impl Contract {
         {
             panic!("{method} {path}: the contract refuses a valid request {b}:\n{e}");
         }
-        let write = method != "GET";
+        let write = method != "GET" && !template.starts_with("/v1/admin");
         let before = if write { self.revision() } else { 0 };
         let send = match &body {
             Some(b) => Send::Json(b),
@@ -423,6 +433,13 @@ impl Contract {
         assert_eq!(r.media_type, "application/problem+json", "{method} {path}");
         assert_eq!(self.revision(), before, "{method} {path} changed the world");
         r.json()
+    }
+
+    /// A successful request whose answer is text (metrics, an event stream).
+    fn ok_text(&self, method: &str, template: &str, path: &str) -> String {
+        let r = self.exchange(method, template, path, Send::Nothing);
+        assert!((200..300).contains(&r.status), "{method} {path}: {}", r.text);
+        r.text
     }
 
     fn refused_json(
@@ -506,6 +523,7 @@ fn answers_match_the_contract() {
     let c = Contract::new(&server.base);
 
     service_and_reads(&c);
+    let start = c.revision();
     create_bodies(&c);
     patch_bodies(&c);
     euler_operators(&c);
@@ -514,6 +532,7 @@ fn answers_match_the_contract() {
     cameras(&c);
     lights(&c);
     deletes(&c);
+    following(&c, start);
     unknown_route(&c);
 
     let seen = c.seen.borrow();
@@ -542,6 +561,8 @@ fn answers_match_the_contract() {
 fn service_and_reads(c: &Contract) {
     let h = c.ok("GET", "/healthz", "/healthz", None);
     assert_eq!(h["status"], "ok");
+    let ready = c.ok("GET", "/readyz", "/readyz", None);
+    assert_eq!(ready["revision"], h["revision"]);
     c.ok("GET", "/openapi.json", "/openapi.json", None);
     let w = c.ok("GET", "/v1/world", "/v1/world", None);
     let list = c.ok("GET", "/v1/bodies", "/v1/bodies", None);
@@ -1425,4 +1446,46 @@ fn unknown_route(c: &Contract) {
     let v = Validator::new(&c.doc);
     let problem = json!({"$ref": "#/components/schemas/Problem"});
     v.validate(&problem, &r.json()).expect("a problem");
+}
+
+/// The changes since `start`, the event stream, metrics and a snapshot on request.
+fn following(c: &Contract, start: u64) {
+    let now = c.revision();
+    let all = c.ok(
+        "GET",
+        "/v1/world/changes",
+        &format!("/v1/world/changes?since={start}&limit=10000"),
+        None,
+    );
+    assert_eq!(all["resync"], false, "{all}");
+    let revisions: Vec<u64> = all["changes"]
+        .as_array()
+        .expect("changes")
+        .iter()
+        .map(|ch| id(&ch["revision"]))
+        .collect();
+    assert_eq!(revisions, (start + 1..=now).collect::<Vec<_>>());
+    let ahead = c.ok(
+        "GET",
+        "/v1/world/changes",
+        &format!("/v1/world/changes?since={}", now + 1),
+        None,
+    );
+    assert_eq!(ahead["resync"], true);
+    c.refused(
+        "GET",
+        "/v1/world/changes",
+        "/v1/world/changes",
+        Send::Nothing,
+        400,
+        Spec::Either,
+    );
+    // A stream from before the history kept sends one `resync` event and ends.
+    let stream = c.ok_text("GET", "/v1/world/events", "/v1/world/events?since=0");
+    assert!(stream.contains("event: resync"), "{stream}");
+    let metrics = c.ok_text("GET", "/metrics", "/metrics");
+    assert!(metrics.contains("winged_http_requests_total"), "{metrics}");
+    assert!(metrics.ends_with("# EOF\n"), "{metrics}");
+    let snap = c.ok("POST", "/v1/admin/snapshot", "/v1/admin/snapshot", None);
+    assert_eq!(snap["revision"], now);
 }

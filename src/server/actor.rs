@@ -308,14 +308,14 @@ impl Default for ActorConfig {
 
 /// Starts the owner on a thread of its own, owning `world` and `journal`, publishing to
 /// `feed`. It stops when every [`Handle`] is dropped, after calling
-/// [`Journal::close`].
+/// [`Journal::close`]; join the returned thread to wait for that.
 pub fn spawn<J: Journal>(
     world: World,
     journal: J,
     feed: Arc<Feed>,
     observer: Arc<dyn Observer>,
     config: ActorConfig,
-) -> std::io::Result<Handle> {
+) -> std::io::Result<(Handle, std::thread::JoinHandle<()>)> {
     let (tx, rx) = mpsc::channel(config.queue.max(1));
     let latest: Latest = Arc::new(Mutex::new(None));
     let failure: Failure = Arc::new(Mutex::new(None));
@@ -328,15 +328,16 @@ pub fn spawn<J: Journal>(
         max_batch: config.max_batch.max(1),
         failed: failure.clone(),
     };
-    std::thread::Builder::new()
+    let thread = std::thread::Builder::new()
         .name("world-owner".into())
         .spawn(move || owner.run(rx))?;
-    Ok(Handle {
+    let handle = Handle {
         tx,
         latest,
         observer,
         failure,
-    })
+    };
+    Ok((handle, thread))
 }
 
 /// Starts an owner of `world` with no durability (tests, `--memory`).
@@ -350,6 +351,7 @@ pub fn spawn_in_memory(world: World) -> Handle {
         ActorConfig::default(),
     )
     .expect("a thread can be started")
+    .0
 }
 
 struct Owner<J> {
@@ -491,12 +493,16 @@ impl<J: Journal> Owner<J> {
         match result {
             Ok(()) => {
                 self.observer.committed(started.elapsed(), pending.len());
-                let mut changes = Vec::with_capacity(pending.len());
-                for p in pending {
-                    let _ = p.reply.send(Ok(p.applied));
-                    changes.push(p.change);
-                }
+                // Published before acknowledged: a writer that reads the feed after its
+                // answer finds its own change there.
+                let (replies, changes): (Vec<_>, Vec<_>) = pending
+                    .into_iter()
+                    .map(|p| ((p.reply, p.applied), p.change))
+                    .unzip();
                 self.feed.publish(changes);
+                for (reply, applied) in replies {
+                    let _ = reply.send(Ok(applied));
+                }
                 self.journal.committed(&self.world);
             }
             Err(e) => {

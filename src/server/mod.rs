@@ -12,11 +12,15 @@
 
 pub mod actor;
 pub mod api;
+pub mod auth;
 pub mod changes;
 pub mod demo;
 pub mod dto;
+// pub mod durable;
 pub mod edit;
 pub mod events;
+pub mod limits;
+pub mod metrics;
 pub mod problem;
 pub mod spec;
 
@@ -34,7 +38,9 @@ use tower_http::trace::{DefaultMakeSpan, DefaultOnResponse, TraceLayer};
 use tracing::Level;
 
 use crate::model::World;
-use actor::{ActorConfig, Journal, Observer, Unobserved};
+use actor::{ActorConfig, Journal};
+use auth::Tokens;
+use metrics::Metrics;
 use changes::Change;
 use events::Feed;
 use problem::Problem;
@@ -67,12 +73,37 @@ impl Default for Limits {
     }
 }
 
+/// Everything a server is built with besides its world and journal.
+#[derive(Clone)]
+pub struct Options {
+    /// Limits on requests and the owner's queue.
+    pub limits: Limits,
+    /// Bearer tokens; none means every caller may do everything (loopback only, see
+    /// [`auth::check_bind`]).
+    pub tokens: Arc<Tokens>,
+    /// Where counts and timings go.
+    pub metrics: Arc<Metrics>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            limits: Limits::default(),
+            tokens: Arc::new(Tokens::none()),
+            metrics: Arc::new(Metrics::new()),
+        }
+    }
+}
+
 /// A built application: the router and the feed its event streams follow.
 pub struct App {
     /// The HTTP routes with every layer.
     pub router: Router,
     /// The change feed (closed at shutdown so event streams end).
     pub feed: Arc<Feed>,
+    /// The world owner's thread: it ends once the router (and every handle) is dropped,
+    /// after the journal's final snapshot.
+    pub owner: std::thread::JoinHandle<()>,
 }
 
 /// Builds the application over `world`, made durable by `journal`, with `recent`
@@ -81,14 +112,21 @@ pub fn build<J: Journal>(
     world: World,
     journal: J,
     recent: Vec<Change>,
-    limits: Limits,
-    observer: Arc<dyn Observer>,
+    options: Options,
 ) -> std::io::Result<App> {
+    let Options {
+        limits,
+        tokens,
+        metrics,
+    } = options;
     let feed = Feed::new(limits.history, world.revision(), recent);
-    let handle = actor::spawn(world, journal, feed.clone(), observer, limits.actor)?;
+    let observer: Arc<dyn actor::Observer> = metrics.clone();
+    let (handle, owner) = actor::spawn(world, journal, feed.clone(), observer, limits.actor)?;
     let state = api::AppState {
         handle,
         feed: feed.clone(),
+        tokens,
+        metrics: metrics.clone(),
     };
     let one_line_per_request = TraceLayer::new_for_http()
         .make_span_with(DefaultMakeSpan::new().level(Level::INFO))
@@ -103,19 +141,22 @@ pub fn build<J: Journal>(
             time_limit,
         ))
         .layer(middleware::from_fn_with_state(in_flight, shed_load))
+        .layer(middleware::from_fn_with_state(metrics, metrics::track))
         .layer(one_line_per_request);
-    Ok(App { router, feed })
+    Ok(App {
+        router,
+        feed,
+        owner,
+    })
 }
 
 /// The application over `world` held in memory only (nothing survives a restart).
 pub fn in_memory(world: World, limits: Limits) -> std::io::Result<App> {
-    build(
-        world,
-        actor::InMemory,
-        Vec::new(),
+    let options = Options {
         limits,
-        Arc::new(Unobserved),
-    )
+        ..Options::default()
+    };
+    build(world, actor::InMemory, Vec::new(), options)
 }
 
 /// Answers 503 with `Retry-After` at once when `max_in_flight` requests are already
@@ -162,8 +203,8 @@ async fn time_limit(State(limit): State<Duration>, req: Request, next: Next) -> 
     }
 }
 
-/// Binds `addr` and serves `app` until `shutdown` resolves; event streams end and
-/// in-flight requests finish first. Returns the bound address through `bound` as soon as
+/// Binds `addr` and serves `app` until `shutdown` resolves; event streams end,
+/// in-flight requests finish, and the world's owner closes its journal first. Returns the bound address through `bound` as soon as
 /// it is listening.
 pub async fn serve(
     addr: SocketAddr,
@@ -173,11 +214,18 @@ pub async fn serve(
 ) -> std::io::Result<()> {
     let listener = TcpListener::bind(addr).await?;
     bound(listener.local_addr()?);
-    let feed = app.feed.clone();
-    axum::serve(listener, app.router)
+    let App {
+        router,
+        feed,
+        owner,
+    } = app;
+    let served = axum::serve(listener, router)
         .with_graceful_shutdown(async move {
             shutdown.await;
             feed.close();
         })
-        .await
+        .await;
+    // The router is gone: the owner finishes its queue, closes its journal and stops.
+    let _ = tokio::task::spawn_blocking(move || owner.join()).await;
+    served
 }

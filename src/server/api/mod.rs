@@ -12,6 +12,7 @@ pub mod precondition;
 use std::sync::Arc;
 
 use axum::extract::{DefaultBodyLimit, FromRef};
+use axum::middleware::from_fn_with_state;
 use axum::http::StatusCode;
 use axum::http::header::ETAG;
 use axum::response::{IntoResponse, Response};
@@ -21,7 +22,9 @@ use serde::Serialize;
 
 use super::actor::{Applied, Handle};
 use super::edit::{Edit, Outcome};
+use super::auth::{Guard, Role, Tokens, guard};
 use super::events::Feed;
+use super::metrics::Metrics;
 use super::problem::Problem;
 use crate::model::World;
 use precondition::etag;
@@ -37,6 +40,10 @@ pub struct AppState {
     pub handle: Handle,
     /// Recent changes and the live change stream.
     pub feed: Arc<Feed>,
+    /// The bearer tokens routes are guarded with.
+    pub tokens: Arc<Tokens>,
+    /// The server's metrics.
+    pub metrics: Arc<Metrics>,
 }
 
 impl FromRef<AppState> for Handle {
@@ -51,29 +58,29 @@ impl FromRef<AppState> for Arc<Feed> {
     }
 }
 
-/// Marks routes that read the world (role `read`).
-fn reads(r: MethodRouter<AppState>) -> MethodRouter<AppState> {
-    r
-}
-
-/// Marks routes that change the world (role `write`).
-fn writes(r: MethodRouter<AppState>) -> MethodRouter<AppState> {
-    r
-}
-
-/// Marks routes that run the server (role `admin`).
-#[allow(dead_code)]
-fn admin(r: MethodRouter<AppState>) -> MethodRouter<AppState> {
-    r
+/// `r` admitting only callers whose token holds at least `need` (everyone when no
+/// tokens are configured).
+fn guarded(r: MethodRouter<AppState>, tokens: &Arc<Tokens>, need: Role) -> MethodRouter<AppState> {
+    r.route_layer(from_fn_with_state(Guard::new(tokens.clone(), need), guard))
 }
 
 /// The router over a running owner and its change feed.
+///
+/// Unguarded: `/healthz`, `/readyz`, `/openapi.json`. Everything else needs a token
+/// (when tokens are configured) of the role its marker names: [`Role::Read`] for
+/// `reads`, [`Role::Write`] for `writes`, [`Role::Admin`] for `admin`.
 pub fn router(state: AppState, max_request_bytes: usize) -> Router {
     use model::*;
+    let tokens = state.tokens.clone();
+    let reads = |r| guarded(r, &tokens, Role::Read);
+    let writes = |r| guarded(r, &tokens, Role::Write);
+    let admin = |r| guarded(r, &tokens, Role::Admin);
     Router::new()
         .route("/healthz", get(ops::healthz))
         .route("/readyz", get(ops::readyz))
         .route("/openapi.json", get(ops::openapi))
+        .route("/metrics", reads(get(ops::metrics)))
+        .route("/v1/admin/snapshot", admin(post(ops::snapshot_now)))
         .route("/v1/world", reads(get(world)))
         .route("/v1/world/changes", reads(get(feed::changes)))
         .route("/v1/world/events", reads(get(feed::events)))
@@ -157,10 +164,4 @@ fn read_answer(revision: u64, body: impl Serialize) -> Response {
 
 async fn not_found() -> Problem {
     Problem::not_found("no such route; see /openapi.json")
-}
-
-/// Silences the unused-route-marker lint until admin routes exist.
-#[allow(dead_code)]
-fn _uses() -> MethodRouter<AppState> {
-    admin(post(not_found))
 }

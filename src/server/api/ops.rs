@@ -1,4 +1,5 @@
-//! Routes for operators: liveness, readiness and the API description.
+//! Routes for operators: liveness, readiness, metrics, snapshots on request and the API
+//! description.
 
 use axum::Json;
 use axum::extract::State;
@@ -7,6 +8,8 @@ use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
 use super::{Answer, AppState, snapshot};
+use crate::server::actor::CheckpointError;
+use crate::server::metrics;
 use crate::server::problem::Problem;
 
 /// How long readiness waits for the world's owner to answer.
@@ -36,6 +39,46 @@ pub(super) async fn readyz(State(s): State<AppState>) -> Answer {
         "queue": s.handle.queue_depth(),
     }))
     .into_response())
+}
+
+/// `GET /metrics`: Prometheus (OpenMetrics) text, with the world's size measured now.
+pub(super) async fn metrics(State(s): State<AppState>) -> Answer {
+    let w = snapshot(&s.handle).await?;
+    let (mut f, mut e, mut v) = (0, 0, 0);
+    for (_, node) in w.bodies() {
+        f += node.body.face_count();
+        e += node.body.edge_count();
+        v += node.body.vertex_count();
+    }
+    s.metrics.set_world(w.revision(), w.body_count(), f, e, v);
+    s.metrics
+        .set_queue_depth(i64::try_from(s.handle.queue_depth()).unwrap_or(i64::MAX));
+    Ok((
+        [(axum::http::header::CONTENT_TYPE, metrics::CONTENT_TYPE)],
+        s.metrics.render(),
+    )
+        .into_response())
+}
+
+/// `POST /v1/admin/snapshot`: writes a snapshot file of the world now (copy it for a
+/// backup) and answers its revision, path and size.
+pub(super) async fn snapshot_now(State(s): State<AppState>) -> Answer {
+    match s.handle.checkpoint().await {
+        Ok(c) => Ok(Json(c).into_response()),
+        Err(e @ CheckpointError::InMemory) => Err(Problem::new(
+            StatusCode::CONFLICT,
+            "in-memory",
+            "No storage",
+            e.to_string(),
+        )),
+        Err(e @ CheckpointError::Storage(_)) => Err(Problem::new(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            "storage-failed",
+            "Storage failed",
+            e.to_string(),
+        )),
+        Err(CheckpointError::Stopped) => Err(Problem::unavailable()),
+    }
 }
 
 /// The OpenAPI description, as JSON.

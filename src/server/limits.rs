@@ -1,0 +1,329 @@
+//! Images sent by clients, decoded within bounds.
+//!
+//! A PNG of a few hundred kilobytes can claim tens of thousands of pixels per side and inflate
+//! to gigabytes (a decompression bomb). [`decode_png`] therefore reads the header first and
+//! refuses an image whose dimensions or decoded size exceed [`ImageLimits`] before a single
+//! row of pixel data is inflated or the output buffer allocated; the decoder's own working
+//! memory is bounded too.
+
+use std::fmt;
+use std::io::Cursor;
+
+use axum::http::StatusCode;
+use png::{BitDepth, ColorType, DecodeOptions, DecodingError, Transformations};
+
+use super::problem::Problem;
+
+/// The eight bytes every PNG file starts with.
+const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
+
+/// Bounds on an image accepted from a client.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImageLimits {
+    /// Most bytes of the encoded (PNG) image.
+    pub max_encoded_bytes: usize,
+    /// Most pixels per row.
+    pub max_width: u32,
+    /// Most rows.
+    pub max_height: u32,
+    /// Most bytes of the decoded pixels (8 bits per channel); also the bound on the
+    /// decoder's working memory.
+    pub max_decoded_bytes: usize,
+}
+
+impl Default for ImageLimits {
+    /// 32 MiB encoded, 16384 pixels per side, 256 MiB decoded.
+    fn default() -> Self {
+        ImageLimits {
+            max_encoded_bytes: 32 << 20,
+            max_width: 16_384,
+            max_height: 16_384,
+            max_decoded_bytes: 256 << 20,
+        }
+    }
+}
+
+/// A decoded image, 8 bits per channel, rows top to bottom without padding.
+///
+/// Invariant: `pixels.len() == width * height * channels`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DecodedImage {
+    /// Pixels per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Channels per pixel: 1 gray, 2 gray+alpha, 3 RGB, 4 RGBA. Palette images become RGB
+    /// (RGBA with transparency); a `tRNS` chunk adds an alpha channel.
+    pub channels: u8,
+    /// The samples, `channels` bytes per pixel.
+    pub pixels: Vec<u8>,
+}
+
+/// Which size of an image a [`ImageError::TooLarge`] is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Measure {
+    /// The PNG bytes as sent.
+    Encoded,
+    /// The pixels after decoding.
+    Decoded,
+}
+
+impl fmt::Display for Measure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Measure::Encoded => "encoded",
+            Measure::Decoded => "decoded",
+        })
+    }
+}
+
+/// Why an image was refused.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ImageError {
+    /// The bytes do not start with the PNG signature.
+    #[error("not a PNG image (the PNG signature is missing)")]
+    NotPng,
+    /// The PNG is malformed or truncated; the decoder's message.
+    #[error("corrupt PNG image: {0}")]
+    Corrupt(String),
+    /// The encoded or decoded image is larger than its limit.
+    #[error("the {what} image is {bytes} bytes; at most {limit} bytes are accepted")]
+    TooLarge {
+        /// Which size.
+        what: Measure,
+        /// The size (saturated at `u64::MAX`).
+        bytes: u64,
+        /// The limit.
+        limit: u64,
+    },
+    /// The image has more pixels per row or more rows than accepted.
+    #[error("the image is {width}×{height} pixels; at most {max_width}×{max_height} are accepted")]
+    TooWide {
+        /// Pixels per row claimed by the header.
+        width: u32,
+        /// Rows claimed by the header.
+        height: u32,
+        /// The width limit.
+        max_width: u32,
+        /// The height limit.
+        max_height: u32,
+    },
+    /// Decoding needed more working memory than allowed (e.g. huge metadata chunks).
+    #[error("decoding the image needs more than {limit} bytes of working memory")]
+    WorkingMemory {
+        /// The limit.
+        limit: usize,
+    },
+}
+
+impl From<ImageError> for Problem {
+    /// 400 `invalid-image` for images that are not PNG or are broken, 413 `too-large` for
+    /// images beyond a limit.
+    fn from(e: ImageError) -> Problem {
+        let detail = e.to_string();
+        match e {
+            ImageError::NotPng | ImageError::Corrupt(_) => Problem::new(
+                StatusCode::BAD_REQUEST,
+                "invalid-image",
+                "Invalid image",
+                detail,
+            ),
+            ImageError::TooLarge { .. }
+            | ImageError::TooWide { .. }
+            | ImageError::WorkingMemory { .. } => Problem::new(
+                StatusCode::PAYLOAD_TOO_LARGE,
+                "too-large",
+                "Image too large",
+                detail,
+            ),
+        }
+    }
+}
+
+fn decoding_error(e: DecodingError, limits: &ImageLimits) -> ImageError {
+    match e {
+        DecodingError::LimitsExceeded => ImageError::WorkingMemory {
+            limit: limits.max_decoded_bytes,
+        },
+        other => ImageError::Corrupt(other.to_string()),
+    }
+}
+
+/// The fewest 8-bit channels an image of `color` decodes to (without a `tRNS` chunk).
+fn min_channels(color: ColorType) -> u64 {
+    match color {
+        ColorType::Grayscale => 1,
+        ColorType::GrayscaleAlpha => 2,
+        ColorType::Rgb | ColorType::Indexed => 3,
+        ColorType::Rgba => 4,
+    }
+}
+
+fn too_large_decoded(bytes: u64, limits: &ImageLimits) -> ImageError {
+    ImageError::TooLarge {
+        what: Measure::Decoded,
+        bytes,
+        limit: limits.max_decoded_bytes as u64,
+    }
+}
+
+/// Decodes a PNG image to 8 bits per channel, within `limits`.
+///
+/// Order of checks, each before any further work:
+/// 1. the encoded size against `max_encoded_bytes`, and the PNG signature;
+/// 2. the header (IHDR): width and height against `max_width`/`max_height`, and the least
+///    decoded size the colour type allows against `max_decoded_bytes`;
+/// 3. the metadata up to the first image data chunk (e.g. `tRNS`, which adds an alpha
+///    channel): the exact decoded size against `max_decoded_bytes`;
+/// 4. only then is the output buffer allocated and pixel data inflated. The decoder's own
+///    buffers are bounded by `max_decoded_bytes` through [`png::Limits`].
+///
+/// 16-bit samples keep their high byte; palette and sub-byte images are expanded. Only the
+/// default image of an animated PNG is decoded; text and ICC profile chunks are skipped, and
+/// chunks after the image data are not read.
+///
+/// Postcondition: on success `pixels.len() == width * height * channels <= max_decoded_bytes`.
+///
+/// # Errors
+/// [`ImageError::NotPng`], [`ImageError::Corrupt`] (malformed, truncated, bad checksum),
+/// [`ImageError::TooLarge`], [`ImageError::TooWide`], [`ImageError::WorkingMemory`].
+pub fn decode_png(bytes: &[u8], limits: &ImageLimits) -> Result<DecodedImage, ImageError> {
+    if bytes.len() > limits.max_encoded_bytes {
+        return Err(ImageError::TooLarge {
+            what: Measure::Encoded,
+            bytes: bytes.len() as u64,
+            limit: limits.max_encoded_bytes as u64,
+        });
+    }
+    if !bytes.starts_with(&PNG_SIGNATURE) {
+        return Err(ImageError::NotPng);
+    }
+
+    let mut options = DecodeOptions::default();
+    options.set_ignore_text_chunk(true);
+    options.set_ignore_iccp_chunk(true);
+    let mut decoder = png::Decoder::new_with_options(Cursor::new(bytes), options);
+    decoder.set_limits(png::Limits {
+        bytes: limits.max_decoded_bytes,
+    });
+    decoder.set_transformations(Transformations::normalize_to_color8());
+
+    let header = decoder
+        .read_header_info()
+        .map_err(|e| decoding_error(e, limits))?;
+    let (width, height) = (header.width, header.height);
+    if width > limits.max_width || height > limits.max_height {
+        return Err(ImageError::TooWide {
+            width,
+            height,
+            max_width: limits.max_width,
+            max_height: limits.max_height,
+        });
+    }
+    let least = u64::from(width)
+        .saturating_mul(u64::from(height))
+        .saturating_mul(min_channels(header.color_type));
+    if least > limits.max_decoded_bytes as u64 {
+        return Err(too_large_decoded(least, limits));
+    }
+
+    // Reads the chunks before the first IDAT; no pixel data yet.
+    let mut reader = decoder.read_info().map_err(|e| decoding_error(e, limits))?;
+    let (color, depth) = reader.output_color_type();
+    let channels: u8 = match color {
+        ColorType::Grayscale => 1,
+        ColorType::GrayscaleAlpha => 2,
+        ColorType::Rgb => 3,
+        ColorType::Rgba => 4,
+        ColorType::Indexed => {
+            return Err(ImageError::Corrupt("the palette was not expanded".into()));
+        }
+    };
+    if depth != BitDepth::Eight {
+        return Err(ImageError::Corrupt(format!(
+            "samples decode to {} bits, not 8",
+            depth as u8
+        )));
+    }
+    let exact = u64::from(width)
+        .saturating_mul(u64::from(height))
+        .saturating_mul(u64::from(channels));
+    let size = match reader.output_buffer_size() {
+        Some(size) if size as u64 <= limits.max_decoded_bytes as u64 => size,
+        _ => return Err(too_large_decoded(exact, limits)),
+    };
+
+    let mut pixels = vec![0u8; size];
+    let frame = reader
+        .next_frame(&mut pixels)
+        .map_err(|e| decoding_error(e, limits))?;
+    pixels.truncate(frame.buffer_size());
+    Ok(DecodedImage {
+        width: frame.width,
+        height: frame.height,
+        channels,
+        pixels,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn problems_have_the_right_status() {
+        let p: Problem = ImageError::NotPng.into();
+        assert_eq!(p.status, StatusCode::BAD_REQUEST);
+        let p: Problem = ImageError::Corrupt("bad".into()).into();
+        assert_eq!(
+            (p.status, p.kind),
+            (StatusCode::BAD_REQUEST, "invalid-image")
+        );
+        let p: Problem = ImageError::TooLarge {
+            what: Measure::Decoded,
+            bytes: 10,
+            limit: 5,
+        }
+        .into();
+        assert_eq!(p.status, StatusCode::PAYLOAD_TOO_LARGE);
+        assert_eq!(
+            p.detail,
+            "the decoded image is 10 bytes; at most 5 bytes are accepted"
+        );
+        let p: Problem = ImageError::TooWide {
+            width: 9,
+            height: 1,
+            max_width: 8,
+            max_height: 8,
+        }
+        .into();
+        assert_eq!(
+            (p.status, p.kind),
+            (StatusCode::PAYLOAD_TOO_LARGE, "too-large")
+        );
+    }
+
+    #[test]
+    fn encoded_size_and_signature_are_checked_first() {
+        let limits = ImageLimits {
+            max_encoded_bytes: 4,
+            ..ImageLimits::default()
+        };
+        assert_eq!(
+            decode_png(&PNG_SIGNATURE, &limits),
+            Err(ImageError::TooLarge {
+                what: Measure::Encoded,
+                bytes: 8,
+                limit: 4
+            })
+        );
+        assert_eq!(
+            decode_png(b"GIF89a", &ImageLimits::default()),
+            Err(ImageError::NotPng)
+        );
+        assert!(matches!(
+            decode_png(&PNG_SIGNATURE, &ImageLimits::default()),
+            Err(ImageError::Corrupt(_))
+        ));
+    }
+}
