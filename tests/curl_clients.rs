@@ -5,67 +5,20 @@
 //! These tests need `bash` and `curl` (and `jq` or `python3`); they fail, never skip, when
 //! one is missing.
 
-use std::io::{BufRead, BufReader};
+mod process;
+
 use std::path::PathBuf;
-use std::process::{Child, Command, Output, Stdio};
-use std::sync::mpsc;
-use std::time::Duration;
+use std::process::{Command, Output, Stdio};
 
-/// A `winged serve` child process on 127.0.0.1:0, killed when dropped.
-struct Server {
-    child: Child,
-    url: String,
-}
+use process::Server;
 
-impl Server {
-    fn start(demo: bool) -> Server {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_winged"));
-        cmd.args(["serve", "--addr", "127.0.0.1:0"]);
-        if demo {
-            cmd.arg("--demo");
-        }
-        let mut child = cmd
-            .env("RUST_LOG", "info")
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start the winged binary");
-        let stdout = child.stdout.take().expect("piped stdout");
-        // Read the log on a thread: the first line names the bound address, and the rest
-        // (one line per request) must keep draining or the server would block on a full
-        // pipe.
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            let mut tx = Some(tx);
-            for line in BufReader::new(stdout).lines() {
-                let Ok(line) = line else { break };
-                if let Some(rest) = line.split("bound=").nth(1)
-                    && let Some(tx) = tx.take()
-                {
-                    let addr = rest.split_whitespace().next().unwrap_or("").to_owned();
-                    let _ = tx.send(addr);
-                }
-            }
-        });
-        let addr = match rx.recv_timeout(Duration::from_secs(30)) {
-            Ok(addr) => addr,
-            Err(_) => {
-                let _ = child.kill();
-                panic!("winged serve printed no bound= line within 30 s");
-            }
-        };
-        Server {
-            child,
-            url: format!("http://{addr}"),
-        }
-    }
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+/// A `winged serve --memory` on 127.0.0.1:0 (with the demo scene if asked), killed when
+/// dropped.
+fn start(demo: bool) -> Server {
+    if demo {
+        Server::start(&["--memory", "--demo"])
+    } else {
+        Server::start(&["--memory"])
     }
 }
 
@@ -133,8 +86,8 @@ fn run_ok(script: &str, url: &str, env: &[(&str, &str)]) -> String {
 
 #[test]
 fn euler_cube_builds_checks_moves_and_deletes_a_cube() {
-    let server = Server::start(false);
-    let out = run_ok("euler_cube.sh", &server.url, &[]);
+    let server = start(false);
+    let out = run_ok("euler_cube.sh", &server.base, &[]);
     assert!(out.contains("topology: F=6 E=12 V=8"), "{out}");
     assert!(out.contains("moved: world position (3"), "{out}");
     assert!(out.contains("euler_cube: ok (body "), "{out}");
@@ -147,7 +100,7 @@ fn euler_cube_builds_checks_moves_and_deletes_a_cube() {
     );
     assert!(out.contains("\"op\": \"mkfe\""), "{out}");
     // Again, without the transcript.
-    let out = run_ok("euler_cube.sh", &server.url, &[("QUIET", "1")]);
+    let out = run_ok("euler_cube.sh", &server.base, &[("QUIET", "1")]);
     assert!(
         !out.contains("$ curl"),
         "QUIET=1 keeps the transcript out: {out}"
@@ -157,7 +110,7 @@ fn euler_cube_builds_checks_moves_and_deletes_a_cube() {
 
 #[test]
 fn euler_cube_reads_json_with_python3_and_with_jq() {
-    let server = Server::start(false);
+    let server = start(false);
     let mut readers = vec!["python3"];
     if has("jq") {
         readers.push("jq");
@@ -165,7 +118,7 @@ fn euler_cube_reads_json_with_python3_and_with_jq() {
     for reader in readers {
         let out = run_ok(
             "euler_cube.sh",
-            &server.url,
+            &server.base,
             &[("WINGED_JSON", reader), ("QUIET", "1")],
         );
         assert!(out.contains("euler_cube: ok"), "{reader}: {out}");
@@ -174,8 +127,8 @@ fn euler_cube_reads_json_with_python3_and_with_jq() {
 
 #[test]
 fn demo_tour_reads_the_demo_scene() {
-    let server = Server::start(true);
-    let out = run_ok("demo_tour.sh", &server.url, &[]);
+    let server = start(true);
+    let out = run_ok("demo_tour.sh", &server.base, &[]);
     for want in [
         "table: body ",
         " leg1 ",
@@ -194,8 +147,8 @@ fn demo_tour_reads_the_demo_scene() {
 
 #[test]
 fn demo_tour_on_an_empty_world_says_to_start_with_demo() {
-    let server = Server::start(false);
-    let o = run("demo_tour.sh", &server.url, &[]);
+    let server = start(false);
+    let o = run("demo_tour.sh", &server.base, &[]);
     let (out, err) = text(&o);
     assert!(!o.status.success(), "{out}");
     assert!(err.contains("--demo"), "{err}");
@@ -203,8 +156,8 @@ fn demo_tour_on_an_empty_world_says_to_start_with_demo() {
 
 #[test]
 fn errors_shows_404_422_and_400_as_problem_json() {
-    let server = Server::start(false);
-    let out = run_ok("errors.sh", &server.url, &[]);
+    let server = start(false);
+    let out = run_ok("errors.sh", &server.base, &[]);
     for want in [
         "HTTP 404, Content-Type: application/problem+json",
         "HTTP 422, Content-Type: application/problem+json",
@@ -219,7 +172,7 @@ fn errors_shows_404_422_and_400_as_problem_json() {
 
 #[test]
 fn a_refused_request_stops_a_script_with_the_problem_on_stderr() {
-    let server = Server::start(false);
+    let server = start(false);
     require_tools();
     let lib = scripts().join("lib.sh");
     let o = Command::new("bash")
@@ -228,7 +181,7 @@ fn a_refused_request_stops_a_script_with_the_problem_on_stderr() {
             "set -euo pipefail; . '{}'; r=$(call GET /v1/bodies/424242); echo not reached",
             lib.display()
         ))
-        .env("WINGED", &server.url)
+        .env("WINGED", &server.base)
         .output()
         .expect("run bash");
     let (out, err) = text(&o);
