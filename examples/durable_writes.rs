@@ -1,0 +1,138 @@
+//! Durable writes per second over real HTTP: a server on a fresh data directory (SQLite
+//! journal, `synchronous=FULL` unless `--normal`), and 1, 8 and 64 concurrent clients
+//! each sending small writes (a body's pose) as fast as their answers come back. Every
+//! answered write is on disk.
+//!
+//! ```sh
+//! cargo run --release --example durable_writes -- [seconds per level] [--normal]
+//! ```
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use serde_json::json;
+use winged::model::World;
+use winged::server::durable::{self, SnapshotPolicy};
+use winged::server::metrics::Metrics;
+use winged::server::{Options, build, serve};
+use winged::store::{Durability, StoreOptions};
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let seconds: u64 = args
+        .iter()
+        .find_map(|a| a.parse().ok())
+        .unwrap_or(5);
+    let durability = if args.iter().any(|a| a == "--normal") {
+        Durability::Normal
+    } else {
+        Durability::Full
+    };
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let data = dir.path().join("world");
+    let (addr_tx, addr_rx) = std::sync::mpsc::channel();
+    let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+    let server = {
+        let data = data.clone();
+        std::thread::spawn(move || {
+            let rt = tokio::runtime::Runtime::new().expect("a runtime");
+            let options = Options::default();
+            let opened = durable::open(
+                &data,
+                StoreOptions {
+                    durability,
+                    ..StoreOptions::default()
+                },
+                SnapshotPolicy::default(),
+                1000,
+                Arc::new(Metrics::new()),
+                || Some(World::new()),
+            )
+            .expect("the data directory opens");
+            let app = rt
+                .block_on(async { build(opened.world, opened.journal, opened.recent, options) })
+                .expect("the server builds");
+            rt.block_on(serve(
+                "127.0.0.1:0".parse().unwrap(),
+                app,
+                move |a| {
+                    let _ = addr_tx.send(a);
+                },
+                async move {
+                    let _ = stop_rx.await;
+                },
+            ))
+            .expect("the server runs");
+        })
+    };
+    let addr = addr_rx.recv().expect("the server binds");
+    let base = format!("http://{addr}");
+    println!(
+        "durable writes over HTTP, {:?} durability, {seconds} s per level, data in {}",
+        durability,
+        data.display()
+    );
+    println!("| clients | writes | writes/s | p50 ms | p99 ms |");
+    println!("|---|---|---|---|---|");
+    for clients in [1usize, 8, 64] {
+        // One body per client, so that the writes do not contend on a name or a body.
+        let bodies: Vec<u64> = (0..clients)
+            .map(|i| {
+                let agent = ureq::Agent::new_with_defaults();
+                let v: serde_json::Value = agent
+                    .post(format!("{base}/v1/bodies"))
+                    .send_json(json!({"name": format!("c{clients}-{i}"), "shape": {"type": "box", "size": [1, 1, 1]}}))
+                    .expect("a body")
+                    .body_mut()
+                    .read_json()
+                    .expect("JSON");
+                v["id"].as_u64().expect("an id")
+            })
+            .collect();
+        let stop = Arc::new(AtomicBool::new(false));
+        let started = Instant::now();
+        let workers: Vec<_> = bodies
+            .into_iter()
+            .map(|body| {
+                let (base, stop) = (base.clone(), stop.clone());
+                std::thread::spawn(move || {
+                    let agent = ureq::Agent::new_with_defaults();
+                    let mut latencies = Vec::new();
+                    let mut x = 0.0;
+                    while !stop.load(Ordering::Relaxed) {
+                        x += 1.0;
+                        let t = Instant::now();
+                        agent
+                            .patch(format!("{base}/v1/bodies/{body}"))
+                            .send_json(json!({"pose": {"position": [x, 0, 0], "rotation": [0, 0, 0, 1]}}))
+                            .expect("a durable write");
+                        latencies.push(t.elapsed());
+                    }
+                    latencies
+                })
+            })
+            .collect();
+        std::thread::sleep(Duration::from_secs(seconds));
+        stop.store(true, Ordering::Relaxed);
+        let mut all: Vec<Duration> = workers
+            .into_iter()
+            .flat_map(|w| w.join().expect("a client"))
+            .collect();
+        let elapsed = started.elapsed().as_secs_f64();
+        all.sort();
+        let pct = |p: f64| {
+            all.get(((all.len() as f64 * p) as usize).min(all.len().saturating_sub(1)))
+                .map_or(0.0, |d| d.as_secs_f64() * 1e3)
+        };
+        println!(
+            "| {clients} | {} | {:.0} | {:.2} | {:.2} |",
+            all.len(),
+            all.len() as f64 / elapsed,
+            pct(0.5),
+            pct(0.99)
+        );
+    }
+    let _ = stop_tx.send(());
+    server.join().expect("the server stops");
+}
