@@ -30,6 +30,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use super::arena::Arena;
 use super::body::Body;
@@ -163,7 +164,7 @@ pub struct UngluedBodies {
 
 /// The world model: bodies in a parts tree, cameras, lights, serials and a revision.
 /// See the [module documentation](self).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct World {
     tree: PartsTree,
     serials: Serials,
