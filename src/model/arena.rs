@@ -7,6 +7,8 @@
 //! not touch the index; a lookup checks that the slot still carries the serial it looks
 //! for, and the index is compacted when stale entries outnumber live ones.
 
+use serde::{Deserialize, Serialize};
+
 use super::ids::Serial;
 
 /// Stale index entries always tolerated before a compaction, on top of one per live
@@ -14,7 +16,13 @@ use super::ids::Serial;
 const STALE_SLACK: usize = 4096;
 
 /// Slot storage for one kind of entity (faces, edges or vertices) of one body.
-#[derive(Clone, Debug)]
+///
+/// Serialized field by field (records, slot serials, free list, serial index), so a
+/// saved arena reads back identical. Reading one back checks its structure first (see
+/// [`ArenaData`]), so a damaged saved arena is refused instead of panicking later.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "ArenaData<T>")]
+#[serde(bound(serialize = "T: Serialize", deserialize = "T: Deserialize<'de>"))]
 pub struct Arena<T> {
     items: Vec<T>,
     serials: Vec<Serial>,
@@ -216,5 +224,67 @@ impl<T> Arena<T> {
         }
         self.index_serials.truncate(w);
         self.index_slots.truncate(w);
+    }
+}
+
+/// An [`Arena`] as read from a serialized form, before its structure is checked.
+#[derive(Deserialize)]
+pub(crate) struct ArenaData<T> {
+    items: Vec<T>,
+    serials: Vec<Serial>,
+    free: Vec<u32>,
+    live: usize,
+    index_serials: Vec<Serial>,
+    index_slots: Vec<u32>,
+}
+
+impl<T> TryFrom<ArenaData<T>> for Arena<T> {
+    type Error = &'static str;
+
+    /// Accepts the data only if no arena method can index out of bounds or loop on it:
+    /// one serial per record, slots addressable by `u32`, the free list naming each
+    /// dead slot exactly once, `live` counting the others, and the serial index sorted
+    /// with every entry naming a slot in range. (The index may hold stale entries: a
+    /// lookup checks them.)
+    fn try_from(d: ArenaData<T>) -> Result<Self, Self::Error> {
+        let n = d.items.len();
+        if d.serials.len() != n {
+            return Err("an arena has a different number of records and serials");
+        }
+        if u32::try_from(n).is_err() {
+            return Err("an arena has more slots than 32-bit ids can name");
+        }
+        let dead = d.serials.iter().filter(|&&s| s == Serial::NONE).count();
+        if d.live != n - dead {
+            return Err("an arena's live count disagrees with its serials");
+        }
+        if d.free.len() != dead {
+            return Err("an arena's free list does not name every dead slot");
+        }
+        let mut seen = vec![false; n];
+        for &slot in &d.free {
+            let i = slot as usize;
+            if i >= n || d.serials[i] != Serial::NONE || seen[i] {
+                return Err("an arena's free list names a live, missing or repeated slot");
+            }
+            seen[i] = true;
+        }
+        if d.index_serials.len() != d.index_slots.len() {
+            return Err("an arena's serial index has unpaired entries");
+        }
+        if d.index_slots.iter().any(|&slot| slot as usize >= n) {
+            return Err("an arena's serial index names a slot that does not exist");
+        }
+        if d.index_serials.windows(2).any(|w| w[0] > w[1]) {
+            return Err("an arena's serial index is not sorted");
+        }
+        Ok(Arena {
+            items: d.items,
+            serials: d.serials,
+            free: d.free,
+            live: d.live,
+            index_serials: d.index_serials,
+            index_slots: d.index_slots,
+        })
     }
 }

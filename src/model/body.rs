@@ -15,19 +15,20 @@
 //! `geometry`).
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use super::arena::Arena;
 use super::ids::{EdgeId, FaceId, Serial, Serials, Side, VertexId};
 
 /// A face record: PED, one edge on the face's perimeter.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Face {
     /// One edge of this face's perimeter, or [`EdgeId::NONE`] in a seminal body.
     pub ped: EdgeId,
 }
 
 /// A vertex record: its locus and PED, one edge of its perimeter.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Vertex {
     /// The locus, in the body's own frame (meters).
     pub pos: DVec3,
@@ -42,7 +43,7 @@ pub struct Vertex {
 /// at NVT (lower left and lower right). Side `s` is the use of the edge by `face[s]`:
 /// it runs from `vt[s]` to `vt[!s]`, counter-clockwise about `face[s]`; `ccw[s]` is the
 /// next edge of that face after it and `cw[s]` the one before it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Edge {
     /// `[NVT, PVT]`.
     pub vt: [VertexId; 2],
@@ -113,7 +114,7 @@ impl Edge {
 ///
 /// Topology is changed only through the Euler operators (`euler`), which keep
 /// F − E + V = 2(B − H); the body records its handle count H.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Body {
     pub(crate) faces: Arena<Face>,
     pub(crate) edges: Arena<Edge>,

@@ -37,6 +37,7 @@
 //! [`Intrinsics::from_opencv_matrix`] adds it back.
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
+use serde::{Deserialize, Serialize};
 
 use super::pose::{Pose, PoseError};
 
@@ -105,7 +106,7 @@ pub enum CameraError {
 
 /// A pinhole camera's pixel geometry. See the [module documentation](self) for the pixel
 /// convention.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Intrinsics {
     /// Image width, pixels.
     pub width: u32,
@@ -288,7 +289,7 @@ impl Intrinsics {
 
 /// A pinhole camera: the pose of Baumgart's i, j, k frame in the world and its pixel
 /// geometry. See the [module documentation](self) for the conventions.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Camera {
     /// The camera frame in the world: position is the lens centre, rotation maps the
     /// camera's x, y, z axes to i (right), j (up), k (toward the viewer).
@@ -472,7 +473,7 @@ pub enum LightError {
 }
 
 /// A light source (Baumgart's SUN for SHADOW, and a point lamp).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Light {
     /// A light at infinity: parallel rays travelling along `direction` (unit, from the
     /// sun toward the scene; a noon sun is `[0, 0, -1]`).

@@ -7,10 +7,12 @@
 
 use std::fmt;
 
+use serde::{Deserialize, Serialize};
+
 macro_rules! slot_id {
     ($(#[$doc:meta])* $name:ident, $prefix:literal) => {
         $(#[$doc])*
-        #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
         pub struct $name(pub(crate) u32);
 
         impl $name {
@@ -66,7 +68,7 @@ slot_id!(
 );
 
 /// A world-unique serial number, never reused. Zero is never issued.
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Debug)]
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Debug, Serialize, Deserialize)]
 pub struct Serial(pub u64);
 
 impl Serial {
@@ -90,7 +92,7 @@ impl fmt::Display for Serial {
 /// Every operation that makes an entity takes `&mut Serials`, so that serial numbers
 /// stay unique across all the bodies of a world and replaying the same operations on a
 /// fresh counter gives the same numbers.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Serials {
     next: u64,
 }

@@ -18,13 +18,15 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::sync::Arc;
 
+use serde::{Deserialize, Serialize};
+
 use super::body::Body;
 use super::ids::{EdgeId, FaceId, Serial, VertexId};
 use super::pose::Pose;
 
 /// A body's id: its serial number, taken from the same world-wide counter as its faces,
 /// edges and vertices, so no id of any kind is ever reused.
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Debug)]
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Debug, Serialize, Deserialize)]
 pub struct BodyId(pub Serial);
 
 impl BodyId {
@@ -66,7 +68,7 @@ pub enum Entity {
 ///
 /// The world hands these out only by shared reference; the tree's links (`supart`,
 /// `parts`, `name`) change only through [`World`](super::World)'s checked operations.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct BodyNode {
     /// The print name FDNAME finds, unique in the world; `None` for an unnamed body.
     pub name: Option<String>,
@@ -103,7 +105,7 @@ pub fn validate_name(name: &str) -> Result<(), &'static str> {
 }
 
 /// The bodies of a world and the links between them.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct PartsTree {
     nodes: BTreeMap<BodyId, BodyNode>,
     names: BTreeMap<String, BodyId>,

@@ -14,6 +14,7 @@
 use std::ops::Mul;
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
+use serde::{Deserialize, Serialize};
 
 /// The smallest quaternion length that [`Pose::new`] will normalise; anything shorter
 /// (or non-finite) names no rotation.
@@ -42,7 +43,7 @@ pub enum PoseError {
 /// `rotation` is a unit quaternion. The fields are public for reading and for building
 /// constant poses; a pose assembled by hand from untrusted numbers should go through
 /// [`Pose::new`] or [`Pose::validated`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Pose {
     /// The child frame's origin, in the parent frame (meters).
     pub position: DVec3,

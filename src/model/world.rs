@@ -30,6 +30,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use super::arena::Arena;
 use super::body::Body;
@@ -163,7 +164,7 @@ pub struct UngluedBodies {
 
 /// The world model: bodies in a parts tree, cameras, lights, serials and a revision.
 /// See the [module documentation](self).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct World {
     tree: PartsTree,
     serials: Serials,
@@ -516,7 +517,10 @@ impl World {
     /// The re-parenting happens before the new pose is set, so `pose` is relative to the
     /// new supart.
     ///
-    /// Refused as [`World::rename`], [`World::attach`] and [`World::set_pose`] are.
+    /// Refused as [`World::rename`], [`World::attach`] and [`World::set_pose`] are, in
+    /// that order. Every check is made before anything changes (none of the three
+    /// changes affects whether another is allowed), so the cost is that of the changes
+    /// themselves, not of a trial copy of the world.
     pub fn update(
         &mut self,
         b: BodyId,
@@ -524,19 +528,41 @@ impl World {
         supart: Option<BodyId>,
         pose: Option<Pose>,
     ) -> Result<(), WorldError> {
-        let revision = self.revision;
-        let mut trial = self.clone();
-        if let Some(name) = name {
-            trial.rename(b, name)?;
-        }
+        // Plan: the same checks, in the same order, as rename, attach and set_pose.
+        let name = match name {
+            Some(name) => {
+                self.live_part(b, "renamed")?;
+                Some(name.map(|n| self.free_name(n, Some(b))).transpose()?)
+            }
+            None => None,
+        };
         if let Some(supart) = supart {
-            trial.attach(b, supart)?;
+            self.live_part(b, "attached to another body")?;
+            self.live(supart)?;
+            if self.tree.is_within(supart, b) {
+                return Err(WorldError::Cycle { body: b, supart });
+            }
+        }
+        let pose = match pose {
+            Some(pose) => {
+                self.live_part(b, "posed")?;
+                Some(pose.validated()?)
+            }
+            None => None,
+        };
+        // Apply: nothing below can fail.
+        if let Some(name) = name {
+            self.tree.set_name(b, name);
+        }
+        if let Some(supart) = supart
+            && self.tree.supart(b) != Some(supart)
+        {
+            self.relink_in_place(b, supart);
         }
         if let Some(pose) = pose {
-            trial.set_pose(b, pose)?;
+            self.tree.get_mut(b).expect("checked").pose = pose;
         }
-        trial.revision = revision + 1;
-        *self = trial;
+        self.written();
         Ok(())
     }
 

@@ -164,8 +164,13 @@ pub struct CreateBody {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Default)]
 #[serde(deny_unknown_fields)]
 pub struct PatchBody {
-    /// New name; `null` to remove it.
-    #[serde(default, deserialize_with = "some_or_null")]
+    /// New name; `null` to remove it. Absent (not `null`) when written out with no
+    /// change of name, so that it reads back as no change.
+    #[serde(
+        default,
+        deserialize_with = "some_or_null",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub name: Option<Option<String>>,
     /// New supart.
     #[serde(default)]
