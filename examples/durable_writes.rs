@@ -20,10 +20,7 @@ use winged::store::{Durability, StoreOptions};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let seconds: u64 = args
-        .iter()
-        .find_map(|a| a.parse().ok())
-        .unwrap_or(5);
+    let seconds: u64 = args.iter().find_map(|a| a.parse().ok()).unwrap_or(5);
     let durability = if args.iter().any(|a| a == "--normal") {
         Durability::Normal
     } else {
@@ -105,7 +102,9 @@ fn main() {
                         let t = Instant::now();
                         agent
                             .patch(format!("{base}/v1/bodies/{body}"))
-                            .send_json(json!({"pose": {"position": [x, 0, 0], "rotation": [0, 0, 0, 1]}}))
+                            .send_json(
+                                json!({"pose": {"position": [x, 0, 0], "rotation": [0, 0, 0, 1]}}),
+                            )
                             .expect("a durable write");
                         latencies.push(t.elapsed());
                     }

@@ -192,9 +192,8 @@ fn serve(args: ServeArgs) -> ExitCode {
             Ok(o) => o,
             Err(e) => return fail(format!("cannot open {}: {e}", args.data.display())),
         };
-        runtime.block_on(async {
-            server::build(opened.world, opened.journal, opened.recent, options)
-        })
+        runtime
+            .block_on(async { server::build(opened.world, opened.journal, opened.recent, options) })
     };
     let app = match built {
         Ok(a) => a,

@@ -438,7 +438,11 @@ impl Contract {
     /// A successful request whose answer is text (metrics, an event stream).
     fn ok_text(&self, method: &str, template: &str, path: &str) -> String {
         let r = self.exchange(method, template, path, Send::Nothing);
-        assert!((200..300).contains(&r.status), "{method} {path}: {}", r.text);
+        assert!(
+            (200..300).contains(&r.status),
+            "{method} {path}: {}",
+            r.text
+        );
         r.text
     }
 

@@ -36,7 +36,8 @@ fn random_ms(lo: u64, hi: u64, salt: u64) -> u64 {
     let nanos = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.subsec_nanos() as u64);
-    let mixed = (nanos ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    let mixed =
+        (nanos ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     lo + (mixed >> 11) % (hi - lo)
 }
 
@@ -121,7 +122,10 @@ fn acknowledged_writes_survive_sigkill_and_revisions_continue() {
             );
             for (name, id) in &a.bodies {
                 let (status, body) = get(&http, &format!("{base}/v1/bodies/{id}"));
-                assert_eq!(status, 200, "round {round}: acknowledged body {name} ({id}) is lost");
+                assert_eq!(
+                    status, 200,
+                    "round {round}: acknowledged body {name} ({id}) is lost"
+                );
                 assert_eq!(body["name"], *name);
                 let (sent, ok) = &a.poses[id];
                 let x = body["pose"]["position"][0].as_f64().unwrap();
@@ -163,7 +167,11 @@ fn acknowledged_writes_survive_sigkill_and_revisions_continue() {
     // ids are new.
     let server = Server::start(&["--data", &data_arg]);
     let a = acked.lock().unwrap();
-    assert!(a.bodies.len() > 20, "the writers made too little: {}", a.bodies.len());
+    assert!(
+        a.bodies.len() > 20,
+        "the writers made too little: {}",
+        a.bodies.len()
+    );
     let (status, made) = post(
         &http,
         &format!("{}/v1/bodies", server.base),

@@ -5,8 +5,8 @@
 
 mod process;
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -96,7 +96,10 @@ fn a_flood_gets_503_with_retry_after_and_the_server_recovers() {
     );
     assert!(busy > 0, "no 503 under a flood ({ok} ok)");
     assert!(ok > 0, "nothing got through ({busy} busy)");
-    assert_eq!(other, 0, "answers other than 200 or 503 ({ok} ok, {busy} busy)");
+    assert_eq!(
+        other, 0,
+        "answers other than 200 or 503 ({ok} ok, {busy} busy)"
+    );
     // Bounded: the owner's queue holds 4 writes and at most 48 requests are in flight;
     // the growth is a few copies of the 32k-face body, not one per request sent.
     let growth_mib = peak.saturating_sub(rss_before) / 1024;
@@ -136,7 +139,10 @@ fn the_server_refuses_a_public_address_without_tokens() {
     // With a token it starts (and a read token cannot write).
     let server = Server::start_with_env(
         &["--memory"],
-        &[("WINGED_TOKENS", "read:r-0123456789abcdef,write:w-0123456789abcdef")],
+        &[(
+            "WINGED_TOKENS",
+            "read:r-0123456789abcdef,write:w-0123456789abcdef",
+        )],
     );
     let http = agent(Duration::from_secs(10));
     let res = http

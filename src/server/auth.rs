@@ -180,7 +180,8 @@ pub enum AuthError {
     /// No tokens are configured and the address is reachable from other machines.
     #[error(
         "refusing to listen on {addr} without bearer tokens: only loopback addresses may be \
-         served unauthenticated (configure tokens, or explicitly allow insecure serving)"
+         served unauthenticated (configure tokens with WINGED_TOKENS, --tokens-file or \
+         --token, or pass --insecure)"
     )]
     UnsafeBind {
         /// The address asked for.

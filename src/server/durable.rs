@@ -207,7 +207,9 @@ impl Journal for Durable {
             // The next start then loads one file instead of replaying the journal.
             match self.store.write_snapshot(world) {
                 Ok(w) => self.written(&w),
-                Err(e) => tracing::error!(error = %e, "final snapshot failed; the journal is whole"),
+                Err(e) => {
+                    tracing::error!(error = %e, "final snapshot failed; the journal is whole")
+                }
             }
         }
     }

@@ -16,7 +16,7 @@ pub mod auth;
 pub mod changes;
 pub mod demo;
 pub mod dto;
-// pub mod durable;
+pub mod durable;
 pub mod edit;
 pub mod events;
 pub mod limits;
@@ -40,9 +40,9 @@ use tracing::Level;
 use crate::model::World;
 use actor::{ActorConfig, Journal};
 use auth::Tokens;
-use metrics::Metrics;
 use changes::Change;
 use events::Feed;
+use metrics::Metrics;
 use problem::Problem;
 
 /// Limits that keep one client, or many, from exhausting the server.

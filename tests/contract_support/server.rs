@@ -7,19 +7,23 @@ use std::time::Duration;
 
 use winged::model::World;
 
-/// `winged::server::serve` on `127.0.0.1:0` in a thread with its own runtime; shut down
-/// (gracefully) when dropped.
+/// `winged::server::serve` on `127.0.0.1:0` over a fresh data directory, in a thread with
+/// its own runtime; shut down (gracefully) when dropped.
 pub struct TestServer {
     /// `http://127.0.0.1:PORT`.
     pub base: String,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     done: mpsc::Receiver<()>,
     thread: Option<JoinHandle<()>>,
+    /// The server's data directory (a real journal and snapshots).
+    _data: tempfile::TempDir,
 }
 
 impl TestServer {
     /// Serves `world`.
     pub fn start(world: World) -> TestServer {
+        let dir = tempfile::tempdir().expect("a temporary directory");
+        let data = dir.path().join("world");
         let (bound_tx, bound_rx) = mpsc::channel::<SocketAddr>();
         let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
         let (done_tx, done_rx) = mpsc::channel::<()>();
@@ -29,9 +33,23 @@ impl TestServer {
                 .enable_all()
                 .build()
                 .expect("a tokio runtime");
+            let opened = winged::server::durable::open(
+                &data,
+                winged::store::StoreOptions::default(),
+                winged::server::durable::SnapshotPolicy::default(),
+                100_000,
+                std::sync::Arc::new(winged::server::metrics::Metrics::new()),
+                || Some(world),
+            )
+            .expect("the data directory opens");
             let app = rt
                 .block_on(async {
-                    winged::server::in_memory(world, winged::server::Limits::default())
+                    winged::server::build(
+                        opened.world,
+                        opened.journal,
+                        opened.recent,
+                        winged::server::Options::default(),
+                    )
                 })
                 .expect("the world's owner starts");
             let served = rt.block_on(winged::server::serve(
@@ -55,6 +73,7 @@ impl TestServer {
             stop: Some(stop_tx),
             done: done_rx,
             thread: Some(thread),
+            _data: dir,
         }
     }
 }

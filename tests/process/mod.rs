@@ -75,10 +75,7 @@ impl Server {
                 }
                 Err(_) => {
                     let _ = child.kill();
-                    panic!(
-                        "the server did not start listening:\n{}",
-                        seen.join("\n")
-                    );
+                    panic!("the server did not start listening:\n{}", seen.join("\n"));
                 }
             }
         }

@@ -12,17 +12,17 @@ pub mod precondition;
 use std::sync::Arc;
 
 use axum::extract::{DefaultBodyLimit, FromRef};
-use axum::middleware::from_fn_with_state;
 use axum::http::StatusCode;
 use axum::http::header::ETAG;
+use axum::middleware::from_fn_with_state;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{MethodRouter, get, post};
 use axum::{Json, Router};
 use serde::Serialize;
 
 use super::actor::{Applied, Handle};
-use super::edit::{Edit, Outcome};
 use super::auth::{Guard, Role, Tokens, guard};
+use super::edit::{Edit, Outcome};
 use super::events::Feed;
 use super::metrics::Metrics;
 use super::problem::Problem;
