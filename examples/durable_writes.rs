@@ -30,11 +30,16 @@ fn main() {
     let data = dir.path().join("world");
     let (addr_tx, addr_rx) = std::sync::mpsc::channel();
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+    let metrics = Arc::new(Metrics::new());
     let server = {
         let data = data.clone();
+        let metrics = metrics.clone();
         std::thread::spawn(move || {
             let rt = tokio::runtime::Runtime::new().expect("a runtime");
-            let options = Options::default();
+            let options = Options {
+                metrics: metrics.clone(),
+                ..Options::default()
+            };
             let opened = durable::open(
                 &data,
                 StoreOptions {
@@ -43,7 +48,7 @@ fn main() {
                 },
                 SnapshotPolicy::default(),
                 1000,
-                Arc::new(Metrics::new()),
+                metrics,
                 || Some(World::new()),
             )
             .expect("the data directory opens");
@@ -70,8 +75,8 @@ fn main() {
         durability,
         data.display()
     );
-    println!("| clients | writes | writes/s | p50 ms | p99 ms |");
-    println!("|---|---|---|---|---|");
+    println!("| clients | writes | writes/s | p50 ms | p99 ms | commits | entries per commit | ms per commit |");
+    println!("|---|---|---|---|---|---|---|---|");
     for clients in [1usize, 8, 64] {
         // One body per client, so that the writes do not contend on a name or a body.
         let bodies: Vec<u64> = (0..clients)
@@ -87,6 +92,7 @@ fn main() {
                 v["id"].as_u64().expect("an id")
             })
             .collect();
+        let (commits0, entries0, seconds0) = commit_totals(&metrics);
         let stop = Arc::new(AtomicBool::new(false));
         let started = Instant::now();
         let workers: Vec<_> = bodies
@@ -124,14 +130,35 @@ fn main() {
             all.get(((all.len() as f64 * p) as usize).min(all.len().saturating_sub(1)))
                 .map_or(0.0, |d| d.as_secs_f64() * 1e3)
         };
+        let (commits1, entries1, seconds1) = commit_totals(&metrics);
+        let commits = commits1 - commits0;
         println!(
-            "| {clients} | {} | {:.0} | {:.2} | {:.2} |",
+            "| {clients} | {} | {:.0} | {:.2} | {:.2} | {commits:.0} | {:.1} | {:.2} |",
             all.len(),
             all.len() as f64 / elapsed,
             pct(0.5),
-            pct(0.99)
+            pct(0.99),
+            (entries1 - entries0) / commits.max(1.0),
+            (seconds1 - seconds0) * 1e3 / commits.max(1.0),
         );
     }
     let _ = stop_tx.send(());
     server.join().expect("the server stops");
+}
+
+/// (commits, entries, seconds) so far, read from the metrics' text.
+fn commit_totals(m: &Metrics) -> (f64, f64, f64) {
+    let text = m.render();
+    let value = |name: &str| {
+        text.lines()
+            .find(|l| l.starts_with(name))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    (
+        value("winged_journal_commit_duration_seconds_count"),
+        value("winged_journal_batch_entries_sum"),
+        value("winged_journal_commit_duration_seconds_sum"),
+    )
 }

@@ -38,7 +38,7 @@ trap cleanup EXIT
 # file; sets pid and url.
 start_server() {
     local log="$logdir/server-${1//[^a-z]/_}.log"
-    RUST_LOG="$1" target/release/winged serve --demo --addr 127.0.0.1:0 >"$log" 2>&1 &
+    RUST_LOG="$1" target/release/winged serve --memory --demo --addr 127.0.0.1:0 >"$log" 2>&1 &
     pid=$!
     local bound=""
     for _ in $(seq 1 100); do
