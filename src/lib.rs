@@ -1,10 +1,12 @@
 //! winged: a world model of Baumgart's winged-edge polyhedra.
 //!
 //! [`model`] is the geometric kernel: pure, synchronous Rust with no I/O. It can be used
-//! as a library on its own.
+//! as a library on its own. [`server`] serves it over HTTP/JSON; [`store`] makes it
+//! durable (a journal of applied edits plus snapshots).
 
 pub mod model;
 pub mod server;
+pub mod store;
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

@@ -1,0 +1,192 @@
+//! Durability for the world: a journal of applied edits plus snapshots, in one data
+//! directory.
+//!
+//! ```text
+//! DIR/journal.db                 SQLite (WAL): every applied edit by revision, as JSON
+//! DIR/snapshots/000000001234.snap  the whole world at revision 1234 (the newest two kept)
+//! ```
+//!
+//! The world's owner appends each batch of applied edits with [`Store::append`] before
+//! it answers the writers (one transaction per batch: group commit). From time to time,
+//! on any thread, it writes a [`write_snapshot`] of a cloned world and then calls
+//! [`Store::prune_through`] with the [`SnapshotWritten::oldest_kept`] revision. On
+//! start, [`Store::recover`] loads the newest snapshot that passes its checks and
+//! replays the journal entries after it through [`apply`](crate::server::edit::apply),
+//! which rebuilds the same world with the same ids because every serial comes from the
+//! world's own counter.
+//!
+//! Everything read from disk is checked (snapshot checksums, the decoded world's
+//! invariants, the journal's format version, each entry's revision): damage gives a
+//! [`StoreError`] or, for a snapshot with an older one to fall back to, a warning, never
+//! a panic or a silently different world.
+//!
+//! A snapshot file alone is a complete backup: copy the newest file in `snapshots/`;
+//! to restore, put it into the `snapshots/` directory of an empty data directory.
+
+mod error;
+mod journal;
+mod recover;
+pub mod snapshot;
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+pub use error::StoreError;
+pub use recover::Recovered;
+pub use snapshot::{
+    SnapshotError, SnapshotFile, SnapshotWritten, check_world, read_snapshot, write_snapshot,
+};
+
+use crate::model::World;
+use crate::server::edit::{Edit, Outcome};
+use journal::Journal;
+
+/// How hard an append works to survive a power loss.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Durability {
+    /// Every append is on disk when it returns (SQLite `synchronous=FULL`).
+    #[default]
+    Full,
+    /// Appends are safe from a crash of the process but the last few may be lost on a
+    /// power loss or an operating system crash (SQLite `synchronous=NORMAL` in WAL
+    /// mode). The journal stays consistent either way.
+    Normal,
+}
+
+/// How to open a [`Store`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StoreOptions {
+    /// What an append guarantees.
+    pub durability: Durability,
+    /// How long an operation waits for another connection's lock on the journal (a
+    /// `sqlite3` shell reading it, say) before it fails.
+    pub busy_timeout: Duration,
+}
+
+impl Default for StoreOptions {
+    fn default() -> Self {
+        StoreOptions {
+            durability: Durability::Full,
+            busy_timeout: Duration::from_secs(5),
+        }
+    }
+}
+
+/// A data directory: the journal, open, and the snapshot files. Used by the world's
+/// owner on its own thread (all calls are synchronous); snapshots may be written from
+/// any thread with [`write_snapshot`].
+pub struct Store {
+    dir: PathBuf,
+    journal: Journal,
+}
+
+impl Store {
+    /// Opens the data directory `dir`, creating it, its journal and its `snapshots/`
+    /// directory as needed, and removes temporary files of snapshot writes that never
+    /// finished.
+    ///
+    /// Refused when a directory cannot be created, the journal cannot be opened
+    /// (permission, not an SQLite database, not a journal) or declares a newer format
+    /// ([`StoreError::UnsupportedVersion`]).
+    pub fn open(dir: &Path, options: StoreOptions) -> Result<Store, StoreError> {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| StoreError::io("creating data directory", dir, e))?;
+        let snaps = snapshot::snapshots_dir(dir);
+        std::fs::create_dir_all(&snaps)
+            .map_err(|e| StoreError::io("creating snapshot directory", &snaps, e))?;
+        snapshot::remove_stale_temps(dir)?;
+        let journal = Journal::open(&dir.join(journal::FILE_NAME), &options)?;
+        Ok(Store {
+            dir: dir.to_owned(),
+            journal,
+        })
+    }
+
+    /// The data directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The journal's database file.
+    pub fn journal_path(&self) -> &Path {
+        self.journal.path()
+    }
+
+    /// Whether the directory holds nothing yet: no snapshot file and no journal entry.
+    /// A server seeds a fresh directory by writing a snapshot of its starting world.
+    pub fn is_fresh(&self) -> Result<bool, StoreError> {
+        Ok(self.journal.len() == 0 && snapshot::list(&self.dir)?.is_empty())
+    }
+
+    /// Journals `entries`, each an applied edit and the world revision it produced, in
+    /// ONE transaction (group commit).
+    ///
+    /// Preconditions, checked ([`StoreError::OutOfOrder`]): the revisions are
+    /// consecutive and continue the journal (after [`Store::recover`], the first is the
+    /// recovered world's revision plus one). Postcondition on `Ok`: every entry is
+    /// committed, durably with [`Durability::Full`]. On `Err` (disk full, say) none of
+    /// the batch is in the journal, and the same batch may be retried.
+    pub fn append(&mut self, entries: &[(u64, &Edit)]) -> Result<(), StoreError> {
+        self.journal.append(entries)
+    }
+
+    /// Rebuilds the world: loads the newest snapshot that passes its checks (passing
+    /// over damaged newer ones with a warning), or starts from [`World::new`] if there
+    /// is none, then replays every journal entry after the snapshot's revision, in
+    /// order, calling `on_applied(revision, edit, outcome, world)` after each (so the
+    /// caller can rebuild its change history). Logs progress every 100,000 entries and
+    /// a final line with the entries replayed and the seconds taken.
+    ///
+    /// Refused, rather than yielding a different world, when the journal does not
+    /// continue the snapshot or has a hole ([`StoreError::Gap`]), an entry is unreadable
+    /// ([`StoreError::Decode`]), refused ([`StoreError::Refused`]) or lands on another
+    /// revision ([`StoreError::Diverged`]), or a damaged newer snapshot held revisions
+    /// nothing else reaches ([`StoreError::Unrecoverable`]). After `Ok`, appends continue
+    /// from the recovered world's revision.
+    pub fn recover(
+        &mut self,
+        on_applied: impl FnMut(u64, &Edit, &Outcome, &World),
+    ) -> Result<Recovered, StoreError> {
+        recover::recover(&self.dir, &mut self.journal, on_applied)
+    }
+
+    /// Writes a snapshot of `world` into this data directory: [`write_snapshot`].
+    pub fn write_snapshot(&self, world: &World) -> Result<SnapshotWritten, StoreError> {
+        write_snapshot(&self.dir, world)
+    }
+
+    /// Deletes the journal entries with revisions up to `revision`, in bounded chunks
+    /// (each its own short transaction), and returns how many were deleted.
+    ///
+    /// Precondition: a snapshot at `revision` or later is durable. Pruning through
+    /// [`SnapshotWritten::oldest_kept`] keeps the directory recoverable even if the
+    /// newest snapshot is later found damaged.
+    pub fn prune_through(&mut self, revision: u64) -> Result<u64, StoreError> {
+        self.journal.prune_through(revision)
+    }
+
+    /// Entries in the journal.
+    pub fn journal_len(&self) -> u64 {
+        self.journal.len()
+    }
+
+    /// The oldest revision in the journal.
+    pub fn first_revision(&self) -> Option<u64> {
+        self.journal.first()
+    }
+
+    /// The newest revision in the journal.
+    pub fn last_revision(&self) -> Option<u64> {
+        self.journal.last()
+    }
+
+    /// Bytes the journal occupies on disk (database and write-ahead log).
+    pub fn journal_bytes(&self) -> u64 {
+        self.journal.bytes()
+    }
+
+    /// The snapshot files in the data directory, oldest first.
+    pub fn snapshots(&self) -> Result<Vec<SnapshotFile>, StoreError> {
+        snapshot::list(&self.dir)
+    }
+}
