@@ -1131,3 +1131,10 @@ fn errors_name_the_file_and_the_cause() {
     let err = write_snapshot(&file, &World::new()).unwrap_err();
     assert!(err.to_string().contains("snapshot"), "{err}");
 }
+
+#[test]
+fn a_store_can_move_to_the_thread_that_owns_the_world() {
+    fn send<T: Send>() {}
+    send::<Store>();
+    send::<StoreError>();
+}
