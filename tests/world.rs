@@ -354,8 +354,11 @@ fn update_makes_all_its_changes_as_one_revision_or_none() {
     assert_sound(&w);
 }
 
+/// A body's id, name, supart, parts and pose.
+type NodeDump = (BodyId, Option<String>, BodyId, Vec<BodyId>, Pose);
+
 /// Names, links and poses of every body, for an exact "unchanged" test.
-fn dump_nodes(w: &World) -> Vec<(BodyId, Option<String>, BodyId, Vec<BodyId>, Pose)> {
+fn dump_nodes(w: &World) -> Vec<NodeDump> {
     w.tree()
         .iter()
         .map(|(id, n)| (id, n.name.clone(), n.supart, n.parts.clone(), n.pose))
