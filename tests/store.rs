@@ -1138,3 +1138,34 @@ fn a_store_can_move_to_the_thread_that_owns_the_world() {
     send::<Store>();
     send::<StoreError>();
 }
+
+#[test]
+fn the_journal_is_not_pruned_past_the_newest_snapshot() {
+    let (mut run, bodies) = plain_run(20, 25);
+    let last = run.world.revision();
+    let err = run.store.prune_through(5).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            StoreError::PruneBeyondSnapshot {
+                revision: 5,
+                newest: None
+            }
+        ),
+        "{err:?}"
+    );
+    let snap = write_snapshot(run.dir.path(), &run.world).unwrap();
+    random_writes(&mut run, &bodies, 5, 26);
+    run.flush();
+    let err = run.store.prune_through(snap.revision + 1).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains(&format!("newest snapshot is at {last}")),
+        "{err}"
+    );
+    assert_eq!(run.store.first_revision(), Some(1));
+    assert_eq!(
+        run.store.prune_through(snap.revision).unwrap(),
+        snap.revision
+    );
+}
