@@ -298,6 +298,73 @@ fn set_pose_moves_the_parts_and_refuses_bad_poses() {
     assert_eq!(w.revision(), rev + 2);
 }
 
+#[test]
+fn update_makes_all_its_changes_as_one_revision_or_none() {
+    let mut w = World::new();
+    let a = arm(&mut w);
+    let rev = w.revision();
+    let before = dump_nodes(&w);
+    // The rename would do, but the re-parenting makes a cycle.
+    assert!(matches!(
+        w.update(a.upper, Some(Some("new")), Some(a.hand), None),
+        Err(WorldError::Cycle { .. })
+    ));
+    // The rename and the re-parenting would do, but the pose is refused.
+    let bad = Pose {
+        position: DVec3::ZERO,
+        rotation: DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0),
+    };
+    assert!(matches!(
+        w.update(a.hand, Some(Some("new")), Some(a.shoulder), Some(bad)),
+        Err(WorldError::Pose(PoseError::ZeroRotation { .. }))
+    ));
+    // The name is taken: refused before the other two are looked at.
+    assert!(matches!(
+        w.update(a.hand, Some(Some("JOINT1")), Some(a.upper), Some(bad)),
+        Err(WorldError::DuplicateName { .. })
+    ));
+    assert!(matches!(
+        w.update(w.root(), Some(None), None, None),
+        Err(WorldError::Root { .. })
+    ));
+    assert_eq!(w.revision(), rev);
+    assert_eq!(dump_nodes(&w), before, "a refused update changes nothing");
+
+    // All three at once: one revision; the pose is relative to the new supart.
+    let pose = Pose::from_translation(DVec3::new(0.0, 1.0, 0.0));
+    w.update(a.hand, Some(Some("grip")), Some(a.shoulder), Some(pose))
+        .unwrap();
+    assert_eq!(w.revision(), rev + 1);
+    assert_eq!(w.name(a.hand), Some("grip"));
+    assert_eq!(w.find_by_name("HAND"), None);
+    assert_eq!(w.supart(a.hand), Some(a.shoulder));
+    assert_eq!(w.pose(a.hand), Some(pose));
+    // Re-parenting alone keeps the world pose; removing the name frees it.
+    let world_pose = w.world_pose(a.hand).unwrap();
+    w.update(a.hand, Some(None), Some(a.forearm), None).unwrap();
+    assert_eq!(w.name(a.hand), None);
+    assert_eq!(w.find_by_name("grip"), None);
+    assert!(
+        w.world_pose(a.hand)
+            .unwrap()
+            .position
+            .abs_diff_eq(world_pose.position, 1e-12)
+    );
+    assert_eq!(w.revision(), rev + 2);
+    assert_sound(&w);
+}
+
+/// A body's id, name, supart, parts and pose.
+type NodeDump = (BodyId, Option<String>, BodyId, Vec<BodyId>, Pose);
+
+/// Names, links and poses of every body, for an exact "unchanged" test.
+fn dump_nodes(w: &World) -> Vec<NodeDump> {
+    w.tree()
+        .iter()
+        .map(|(id, n)| (id, n.name.clone(), n.supart, n.parts.clone(), n.pose))
+        .collect()
+}
+
 // ------------------------------------------------------------------------ names
 
 #[test]

@@ -288,3 +288,67 @@ impl<T> TryFrom<ArenaData<T>> for Arena<T> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An arena with live, dead and reused slots and a stale index entry.
+    fn sample() -> Arena<u32> {
+        let mut a = Arena::default();
+        for s in 1..=5 {
+            a.insert(s as u32 * 10, Serial(s));
+        }
+        a.remove(1);
+        a.remove(3);
+        a.insert(60, Serial(6));
+        a
+    }
+
+    fn data(a: &Arena<u32>) -> ArenaData<u32> {
+        ArenaData {
+            items: a.items.clone(),
+            serials: a.serials.clone(),
+            free: a.free.clone(),
+            live: a.live,
+            index_serials: a.index_serials.clone(),
+            index_slots: a.index_slots.clone(),
+        }
+    }
+
+    #[test]
+    fn an_arena_reads_back_identical() {
+        let a = sample();
+        let bytes = postcard::to_allocvec(&a).unwrap();
+        let b: Arena<u32> = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!(postcard::to_allocvec(&b).unwrap(), bytes);
+        assert_eq!(
+            (&b.items, &b.serials, &b.free, b.live),
+            (&a.items, &a.serials, &a.free, a.live)
+        );
+        assert_eq!(b.find(Serial(6)), a.find(Serial(6)));
+        assert_eq!(b.find(Serial(2)), None);
+    }
+
+    #[test]
+    fn a_damaged_arena_is_refused() {
+        let a = sample();
+        assert!(Arena::try_from(data(&a)).is_ok());
+        let breakages: [fn(&mut ArenaData<u32>); 7] = [
+            |d| {
+                d.items.pop();
+            },
+            |d| d.live += 1,
+            |d| d.free.push(0),
+            |d| d.free[0] = 0,
+            |d| d.free = vec![3, 3],
+            |d| d.index_slots[0] = 99,
+            |d| d.index_serials.swap(0, 2),
+        ];
+        for (k, brk) in breakages.iter().enumerate() {
+            let mut d = data(&a);
+            brk(&mut d);
+            assert!(Arena::try_from(d).is_err(), "breakage {k} was accepted");
+        }
+    }
+}

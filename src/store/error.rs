@@ -121,6 +121,18 @@ pub enum StoreError {
         /// The revision the rest of the directory reaches.
         recovered: u64,
     },
+    /// Pruning the journal past the newest snapshot would delete the only record of
+    /// some writes.
+    #[error(
+        "cannot prune the journal through revision {revision}: the newest snapshot is at {}",
+        match .newest { Some(r) => r.to_string(), None => "none".to_owned() }
+    )]
+    PruneBeyondSnapshot {
+        /// The revision asked for.
+        revision: u64,
+        /// The newest snapshot's revision, if any.
+        newest: Option<u64>,
+    },
     /// A journaled edit was refused on replay: the journal does not describe a world
     /// this program can rebuild.
     #[error("replaying revision {revision}: the edit was refused: {source}")]

@@ -36,8 +36,6 @@ const VACUUM_CHUNK: i64 = 4_096;
 pub(crate) struct Journal {
     conn: Connection,
     path: PathBuf,
-    /// Entries in the journal.
-    len: u64,
     /// The smallest revision journaled, if any.
     first: Option<u64>,
     /// The largest revision journaled, if any.
@@ -57,6 +55,8 @@ impl Journal {
         let conn = Connection::open(path).map_err(sql("opening"))?;
         conn.busy_timeout(options.busy_timeout)
             .map_err(sql("setting the busy timeout"))?;
+        // Refuse another program's database before changing any of its settings.
+        inspect(&conn, path)?;
         // Takes effect only in a new, empty database: lets pruning give pages back.
         conn.pragma_update(None, "auto_vacuum", "INCREMENTAL")
             .map_err(sql("opening"))?;
@@ -76,25 +76,19 @@ impl Journal {
         conn.pragma_update(None, "synchronous", sync)
             .map_err(sql("setting synchronous"))?;
         init_schema(&conn, path)?;
-        let (len, first, last) = conn
-            .query_row(
-                "SELECT count(*), min(revision), max(revision) FROM journal",
-                [],
-                |r| {
-                    Ok((
-                        r.get::<_, i64>(0)?,
-                        r.get::<_, Option<i64>>(1)?,
-                        r.get::<_, Option<i64>>(2)?,
-                    ))
-                },
-            )
-            .map_err(sql("reading the journal's extent"))?;
-        let first = first.map(|r| stored_revision(path, r)).transpose()?;
-        let last = last.map(|r| stored_revision(path, r)).transpose()?;
+        // Two queries: SQLite answers a lone min() or max() from the key's b-tree in
+        // O(log n), but scans the whole table for both at once.
+        let end = |q| {
+            conn.query_row(q, [], |r| r.get::<_, Option<i64>>(0))
+                .map_err(sql("reading the journal's extent"))?
+                .map(|r| stored_revision(path, r))
+                .transpose()
+        };
+        let first = end("SELECT min(revision) FROM journal")?;
+        let last = end("SELECT max(revision) FROM journal")?;
         Ok(Journal {
             conn,
             path: path.to_owned(),
-            len: len.max(0) as u64,
             first,
             last,
             next: last.map(|r| r + 1),
@@ -106,9 +100,14 @@ impl Journal {
         &self.path
     }
 
-    /// Entries in the journal.
+    /// Entries in the journal: its revisions are consecutive (appends continue the
+    /// last one, pruning removes a prefix, and recovery drops a journal that ends
+    /// before the snapshot it recovered from), so this is `last − first + 1`.
     pub(crate) fn len(&self) -> u64 {
-        self.len
+        match (self.first, self.last) {
+            (Some(first), Some(last)) => last.saturating_sub(first) + 1,
+            _ => 0,
+        }
     }
 
     /// The smallest revision journaled.
@@ -187,7 +186,6 @@ impl Journal {
             }
         }
         tx.commit().map_err(sql("committing an append"))?;
-        self.len += entries.len() as u64;
         self.first = self.first.or(Some(first));
         self.last = Some(last);
         self.next = Some(last + 1);
@@ -236,7 +234,6 @@ impl Journal {
                 break;
             }
         }
-        self.len = self.len.saturating_sub(deleted);
         let first: Option<i64> = self
             .conn
             .query_row("SELECT min(revision) FROM journal", [], |r| r.get(0))
@@ -267,7 +264,9 @@ pub(crate) fn read_after(
     mut f: impl FnMut(u64, &[u8]) -> bool,
 ) -> Result<(), StoreError> {
     let sql = |e| sqlite_error(path, "reading", e);
-    let conn = Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY).map_err(sql)?;
+    // One thread uses this connection: SQLite need not lock it.
+    let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+    let conn = Connection::open_with_flags(path, flags).map_err(sql)?;
     let mut stmt = conn
         .prepare("SELECT revision, edit FROM journal WHERE revision > ?1 ORDER BY revision")
         .map_err(sql)?;
@@ -292,29 +291,63 @@ pub(crate) fn read_after(
     Ok(())
 }
 
-/// Creates the tables in an empty database, or checks that an existing one is a
-/// journal in a format this build reads.
-fn init_schema(conn: &Connection, path: &Path) -> Result<(), StoreError> {
+/// Checks that the database is empty (`Ok(true)`) or a journal in a format this build
+/// reads (`Ok(false)`).
+fn inspect(conn: &Connection, path: &Path) -> Result<bool, StoreError> {
     let sql = |what| move |e| sqlite_error(path, what, e);
     let not_journal = |reason: &str| StoreError::NotAJournal {
         path: path.to_owned(),
         reason: reason.to_owned(),
     };
+    let tables: Vec<String> = {
+        let mut stmt = conn
+            .prepare("SELECT name FROM sqlite_master WHERE type = 'table'")
+            .map_err(sql("reading the schema"))?;
+        let names = stmt
+            .query_map([], |r| r.get(0))
+            .map_err(sql("reading the schema"))?;
+        names
+            .collect::<Result<_, _>>()
+            .map_err(sql("reading the schema"))?
+    };
+    if tables.is_empty() {
+        return Ok(true);
+    }
+    if !tables.iter().any(|t| t == "meta") {
+        return Err(not_journal("it has tables but no meta table"));
+    }
+    let version: Option<i64> = conn
+        .query_row(
+            "SELECT value FROM meta WHERE key = 'format_version'",
+            [],
+            |r| r.get(0),
+        )
+        .optional()
+        .map_err(sql("reading the format version"))?;
+    match version {
+        None => Err(not_journal("its meta table has no format_version")),
+        Some(v) if v > FORMAT_VERSION => Err(StoreError::UnsupportedVersion {
+            path: path.to_owned(),
+            found: v,
+            supported: FORMAT_VERSION,
+        }),
+        Some(v) if v < 1 => Err(not_journal(&format!("format version {v} is not one"))),
+        Some(_) if !tables.iter().any(|t| t == "journal") => {
+            Err(not_journal("it has no journal table"))
+        }
+        Some(_) => Ok(false),
+    }
+}
+
+/// Creates the tables in an empty database, or checks that an existing one is a
+/// journal in a format this build reads, in one write transaction (so two processes
+/// creating the same journal do not both create it).
+fn init_schema(conn: &Connection, path: &Path) -> Result<(), StoreError> {
+    let sql = |what| move |e| sqlite_error(path, what, e);
     conn.execute_batch("BEGIN IMMEDIATE")
         .map_err(sql("opening"))?;
-    let result = (|| {
-        let tables: Vec<String> = {
-            let mut stmt = conn
-                .prepare("SELECT name FROM sqlite_master WHERE type = 'table'")
-                .map_err(sql("reading the schema"))?;
-            let names = stmt
-                .query_map([], |r| r.get(0))
-                .map_err(sql("reading the schema"))?;
-            names
-                .collect::<Result<_, _>>()
-                .map_err(sql("reading the schema"))?
-        };
-        if tables.is_empty() {
+    let result = inspect(conn, path).and_then(|empty| {
+        if empty {
             conn.execute_batch(
                 "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);
                  CREATE TABLE journal(revision INTEGER PRIMARY KEY, edit TEXT NOT NULL);",
@@ -325,33 +358,9 @@ fn init_schema(conn: &Connection, path: &Path) -> Result<(), StoreError> {
                 [FORMAT_VERSION],
             )
             .map_err(sql("creating the tables"))?;
-            return Ok(());
         }
-        if !tables.iter().any(|t| t == "meta") {
-            return Err(not_journal("it has tables but no meta table"));
-        }
-        let version: Option<i64> = conn
-            .query_row(
-                "SELECT value FROM meta WHERE key = 'format_version'",
-                [],
-                |r| r.get(0),
-            )
-            .optional()
-            .map_err(sql("reading the format version"))?;
-        match version {
-            None => Err(not_journal("its meta table has no format_version")),
-            Some(v) if v > FORMAT_VERSION => Err(StoreError::UnsupportedVersion {
-                path: path.to_owned(),
-                found: v,
-                supported: FORMAT_VERSION,
-            }),
-            Some(v) if v < 1 => Err(not_journal(&format!("format version {v} is not one"))),
-            Some(_) if !tables.iter().any(|t| t == "journal") => {
-                Err(not_journal("it has no journal table"))
-            }
-            Some(_) => Ok(()),
-        }
-    })();
+        Ok(())
+    });
     let end = if result.is_ok() { "COMMIT" } else { "ROLLBACK" };
     conn.execute_batch(end).map_err(sql("opening"))?;
     result

@@ -158,10 +158,15 @@ impl Store {
     /// Deletes the journal entries with revisions up to `revision`, in bounded chunks
     /// (each its own short transaction), and returns how many were deleted.
     ///
-    /// Precondition: a snapshot at `revision` or later is durable. Pruning through
-    /// [`SnapshotWritten::oldest_kept`] keeps the directory recoverable even if the
-    /// newest snapshot is later found damaged.
+    /// Refused ([`StoreError::PruneBeyondSnapshot`]) unless a snapshot file at
+    /// `revision` or later is in the directory, so the entries deleted are never the
+    /// only record of a write. Pruning through [`SnapshotWritten::oldest_kept`] keeps
+    /// the directory recoverable even if the newest snapshot is later found damaged.
     pub fn prune_through(&mut self, revision: u64) -> Result<u64, StoreError> {
+        let newest = snapshot::list(&self.dir)?.last().map(|s| s.revision);
+        if newest.is_none_or(|n| n < revision) {
+            return Err(StoreError::PruneBeyondSnapshot { revision, newest });
+        }
         self.journal.prune_through(revision)
     }
 

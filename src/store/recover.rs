@@ -79,10 +79,6 @@ pub(crate) fn recover(
     let decoders = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
         .clamp(1, MAX_DECODERS);
-    let decoders = std::env::var("WINGED_DECODERS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(decoders);
     replay(&path, from, decoders, |revision, edit| {
         let expected = world.revision() + 1;
         if revision != expected {
@@ -130,6 +126,20 @@ pub(crate) fn recover(
             recovered: world.revision(),
         });
     }
+    // A journal that ends before the snapshot lags behind it (its last appends were
+    // lost, or never made, while the snapshot was written): what it holds is older than
+    // the world and cannot reach it from an older snapshot either. Dropping it keeps
+    // the journal's revisions consecutive when appends continue from the world.
+    if let Some(last) = journal.last()
+        && last < world.revision()
+    {
+        tracing::warn!(
+            journal_last = last,
+            revision = world.revision(),
+            "the journal ends before the snapshot; dropping its older entries"
+        );
+        journal.prune_through(world.revision())?;
+    }
     let elapsed = started.elapsed();
     tracing::info!(
         revision = world.revision(),
@@ -149,8 +159,15 @@ pub(crate) fn recover(
     })
 }
 
-/// Rows as read: revision and stored JSON.
-type Raw = Result<Vec<(u64, Vec<u8>)>, StoreError>;
+/// Rows as read: each revision with the end of its JSON in one shared buffer.
+#[derive(Default)]
+struct Rows {
+    revisions: Vec<(u64, usize)>,
+    bytes: Vec<u8>,
+}
+
+/// A batch of rows, or the error that stopped the reader.
+type Raw = Result<Rows, StoreError>;
 /// Rows decoded: revision and the edit, or why it does not decode.
 type Decoded = Vec<(u64, Result<Edit, String>)>;
 /// What a decoder hands back: a decoded batch, or the reader's error passed along.
@@ -192,14 +209,14 @@ fn replay(
 /// The reader thread: sends batches of rows round-robin to `to`, or the error that
 /// stopped it. Ends early when a receiver is gone (the replay stopped).
 fn read_batches(path: &Path, from: u64, to: Vec<SyncSender<Raw>>) {
-    let mut batch = Vec::with_capacity(BATCH);
+    let mut batch = Rows::default();
     let mut k = 0;
     let mut gone = false;
     let result = journal::read_after(path, from, |revision, bytes| {
-        batch.push((revision, bytes.to_vec()));
-        if batch.len() == BATCH {
-            let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-            gone = to[k].send(Ok(full)).is_err();
+        batch.bytes.extend_from_slice(bytes);
+        batch.revisions.push((revision, batch.bytes.len()));
+        if batch.revisions.len() == BATCH {
+            gone = to[k].send(Ok(std::mem::take(&mut batch))).is_err();
             k = (k + 1) % to.len();
         }
         !gone
@@ -208,7 +225,7 @@ fn read_batches(path: &Path, from: u64, to: Vec<SyncSender<Raw>>) {
         return;
     }
     let last = match result {
-        Ok(()) if batch.is_empty() => return,
+        Ok(()) if batch.revisions.is_empty() => return,
         Ok(()) => Ok(batch),
         Err(e) => Err(e),
     };
@@ -220,10 +237,16 @@ fn read_batches(path: &Path, from: u64, to: Vec<SyncSender<Raw>>) {
 fn decode_batches(from: Receiver<Raw>, to: SyncSender<Cooked>) {
     for raw in from {
         let decoded = raw.map(|rows| {
-            rows.into_iter()
-                .map(|(revision, bytes)| {
-                    let edit = serde_json::from_slice(&bytes).map_err(|e| e.to_string());
-                    (revision, edit)
+            let mut start = 0;
+            rows.revisions
+                .iter()
+                .map(|&(revision, end)| {
+                    let json = &rows.bytes[start..end];
+                    start = end;
+                    (
+                        revision,
+                        serde_json::from_slice(json).map_err(|e| e.to_string()),
+                    )
                 })
                 .collect()
         });

@@ -141,10 +141,10 @@ pub fn write_snapshot(dir: &Path, world: &World) -> Result<SnapshotWritten, Stor
     fs::create_dir_all(&snaps)
         .map_err(|e| StoreError::io("creating snapshot directory", &snaps, e))?;
     let revision = world.revision();
-    let bytes = encode(world);
+    let (header, payload) = encode_parts(world);
     let path = snaps.join(file_name(revision));
     let tmp = snaps.join(temp_name(revision));
-    if let Err(e) = write_synced(&tmp, &bytes) {
+    if let Err(e) = write_synced(&tmp, &[&header, &payload]) {
         let _ = fs::remove_file(&tmp);
         return Err(StoreError::io("writing snapshot", &tmp, e));
     }
@@ -153,11 +153,13 @@ pub fn write_snapshot(dir: &Path, world: &World) -> Result<SnapshotWritten, Stor
         return Err(StoreError::io("renaming snapshot into place", &path, e));
     }
     sync_dir(&snaps).map_err(|e| StoreError::io("flushing snapshot directory", &snaps, e))?;
+    // The data directory's entry for snapshots/ itself, in case it was just made.
+    sync_dir(dir).map_err(|e| StoreError::io("flushing data directory", dir, e))?;
     let oldest_kept = prune_old(&snaps)?.unwrap_or(revision);
     Ok(SnapshotWritten {
         revision,
         path,
-        bytes: bytes.len() as u64,
+        bytes: (header.len() + payload.len()) as u64,
         duration: started.elapsed(),
         oldest_kept,
     })
@@ -207,18 +209,26 @@ pub fn read_snapshot(path: &Path) -> Result<World, SnapshotError> {
 
 /// Encodes `world` as a complete snapshot file (header and payload).
 pub fn encode(world: &World) -> Vec<u8> {
-    let payload = postcard::to_allocvec(world).expect("encoding to memory cannot fail");
+    let (header, payload) = encode_parts(world);
     let mut out = Vec::with_capacity(HEADER_LEN + payload.len());
-    out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-    out.extend_from_slice(&world.revision().to_le_bytes());
-    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    let mut crc = crc32fast::Hasher::new();
-    crc.update(&out[..CHECKED_HEADER_LEN]);
-    crc.update(&payload);
-    out.extend_from_slice(&crc.finalize().to_le_bytes());
+    out.extend_from_slice(&header);
     out.extend_from_slice(&payload);
     out
+}
+
+/// The header and the payload of `world`'s snapshot file.
+fn encode_parts(world: &World) -> ([u8; HEADER_LEN], Vec<u8>) {
+    let payload = postcard::to_allocvec(world).expect("encoding to memory cannot fail");
+    let mut header = [0u8; HEADER_LEN];
+    header[..8].copy_from_slice(&MAGIC);
+    header[8..12].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
+    header[12..20].copy_from_slice(&world.revision().to_le_bytes());
+    header[20..28].copy_from_slice(&(payload.len() as u64).to_le_bytes());
+    let mut crc = crc32fast::Hasher::new();
+    crc.update(&header[..CHECKED_HEADER_LEN]);
+    crc.update(&payload);
+    header[CHECKED_HEADER_LEN..].copy_from_slice(&crc.finalize().to_le_bytes());
+    (header, payload)
 }
 
 /// Decodes and checks a complete snapshot file held in memory.
@@ -461,10 +471,12 @@ fn is_temp_name(name: &str) -> bool {
     name.starts_with('.') && name.ends_with(".tmp")
 }
 
-/// Writes `bytes` to a new file at `path` and flushes it to disk.
-fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+/// Writes `parts` one after another to a new file at `path` and flushes it to disk.
+fn write_synced(path: &Path, parts: &[&[u8]]) -> std::io::Result<()> {
     let mut f = File::create(path)?;
-    f.write_all(bytes)?;
+    for part in parts {
+        f.write_all(part)?;
+    }
     f.sync_all()
 }
 

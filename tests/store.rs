@@ -1,0 +1,1171 @@
+//! Durability: the journal and snapshots rebuild the same world, entity by entity, and
+//! damage on disk gives a fallback or a clear error, never a different world.
+//!
+//! Real SQLite and real files in temporary directories.
+
+mod common;
+
+use std::path::Path;
+
+use glam::DVec3;
+use serde_json::{Value, json};
+use tempfile::TempDir;
+use winged::model::{Body, BodyId, Serial, World, check_solid, check_topology};
+use winged::server::edit::{Edit, EditError, Outcome, apply};
+use winged::store::{
+    Durability, SnapshotError, Store, StoreError, StoreOptions, check_world, read_snapshot,
+    snapshot, write_snapshot,
+};
+
+use common::dump;
+
+// ------------------------------------------------------------------ harness
+
+/// A world being edited, with every accepted edit journaled in batches of varying size
+/// and every outcome kept to compare with the replay.
+struct Run {
+    dir: TempDir,
+    store: Store,
+    world: World,
+    pending: Vec<(u64, Edit)>,
+    log: Vec<(u64, Edit, Outcome)>,
+    batches: usize,
+    refused: usize,
+}
+
+/// Batch sizes cycled through, as a server groups concurrent writes.
+const BATCHES: [usize; 6] = [1, 3, 7, 16, 2, 64];
+
+fn options() -> StoreOptions {
+    StoreOptions {
+        durability: Durability::Normal,
+        ..StoreOptions::default()
+    }
+}
+
+impl Run {
+    fn new() -> Run {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path(), options()).unwrap();
+        assert!(store.is_fresh().unwrap());
+        Run {
+            dir,
+            store,
+            world: World::new(),
+            pending: Vec::new(),
+            log: Vec::new(),
+            batches: 0,
+            refused: 0,
+        }
+    }
+
+    /// Applies the edit `e` (JSON, as journaled). Accepted: queued for the journal.
+    /// Refused: the world must be exactly as before and nothing is queued.
+    fn try_edit(&mut self, e: Value) -> Result<Outcome, EditError> {
+        let edit: Edit =
+            serde_json::from_value(e.clone()).unwrap_or_else(|err| panic!("{e}: {err}"));
+        let back: Edit = serde_json::from_str(&serde_json::to_string(&edit).unwrap()).unwrap();
+        assert_eq!(back, edit, "the edit reads back as written");
+        let before = self.world.revision();
+        let bytes = snapshot::encode(&self.world);
+        match apply(&mut self.world, &edit) {
+            Ok(o) => {
+                assert_eq!(self.world.revision(), before + 1);
+                self.pending.push((self.world.revision(), edit.clone()));
+                self.log.push((self.world.revision(), edit, o.clone()));
+                if self.pending.len() >= BATCHES[self.batches % BATCHES.len()] {
+                    self.flush();
+                }
+                Ok(o)
+            }
+            Err(err) => {
+                assert_eq!(
+                    snapshot::encode(&self.world),
+                    bytes,
+                    "{e}: a refused edit changed the world"
+                );
+                self.refused += 1;
+                Err(err)
+            }
+        }
+    }
+
+    fn ok(&mut self, e: Value) -> Outcome {
+        let shown = e.to_string();
+        self.try_edit(e)
+            .unwrap_or_else(|err| panic!("{shown} was refused: {err}"))
+    }
+
+    fn refused(&mut self, e: Value) {
+        let shown = e.to_string();
+        assert!(self.try_edit(e).is_err(), "{shown} was accepted");
+    }
+
+    fn flush(&mut self) {
+        let batch: Vec<(u64, &Edit)> = self.pending.iter().map(|(r, e)| (*r, e)).collect();
+        self.store.append(&batch).unwrap();
+        self.pending.clear();
+        self.batches += 1;
+        if self.world.revision() > 0 {
+            assert_eq!(self.store.last_revision(), Some(self.world.revision()));
+        }
+    }
+
+    /// Reopens the data directory and recovers, checking each replayed outcome against
+    /// the one the edit had when first applied.
+    fn recover(&mut self) -> (Store, winged::store::Recovered) {
+        self.flush();
+        let mut store = Store::open(self.dir.path(), options()).unwrap();
+        let log = &self.log;
+        let rec = store
+            .recover(|revision, edit, outcome, world| {
+                let (r, e, o) = &log[revision as usize - 1];
+                assert_eq!((revision, edit, outcome), (*r, e, o));
+                assert_eq!(world.revision(), revision);
+            })
+            .unwrap();
+        (store, rec)
+    }
+
+    fn body(&self, id: u64) -> &Body {
+        self.world.body(BodyId(Serial(id))).expect("a live body")
+    }
+
+    /// The face of body `id` whose outward normal (body frame) points along `n`.
+    fn face_towards(&self, id: u64, n: [f64; 3]) -> u64 {
+        let b = self.body(id);
+        b.face_serial(common::face_towards(b, DVec3::from_array(n)))
+            .get()
+    }
+
+    fn face_vertices(&self, id: u64, face: u64) -> Vec<u64> {
+        let b = self.body(id);
+        let f = b.face_by_serial(Serial(face)).expect("a live face");
+        b.face_vertices(f)
+            .map(|v| b.vertex_serial(v).get())
+            .collect()
+    }
+
+    fn face_edges(&self, id: u64, face: u64) -> Vec<u64> {
+        let b = self.body(id);
+        let f = b.face_by_serial(Serial(face)).expect("a live face");
+        b.face_edges(f).map(|e| b.edge_serial(e).get()).collect()
+    }
+
+    fn edges(&self, id: u64) -> Vec<u64> {
+        let b = self.body(id);
+        b.edges().map(|e| b.edge_serial(e).get()).collect()
+    }
+}
+
+fn create(name: &str, shape: Value) -> Value {
+    json!({"edit": "create_body", "name": name, "shape": shape})
+}
+
+fn create_at(name: &str, at: [f64; 3], shape: Value) -> Value {
+    json!({"edit": "create_body", "name": name, "shape": shape,
+           "pose": {"position": at, "rotation": [0.0, 0.0, 0.0, 1.0]}})
+}
+
+fn euler(body: u64, op: Value) -> Value {
+    json!({"edit": "euler", "body": body, "op": op})
+}
+
+fn transform(body: u64, req: Value) -> Value {
+    json!({"edit": "transform", "body": body, "req": req})
+}
+
+fn patch(body: u64, patch: Value) -> Value {
+    json!({"edit": "patch_body", "body": body, "patch": patch})
+}
+
+fn id(o: &Outcome) -> u64 {
+    o.id.expect("an id")
+}
+
+/// A small deterministic generator (xorshift64*).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+    fn f(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * ((self.next() >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+/// Every observable part of two worlds is the same: revision, serial counter, each body
+/// (name, supart, parts, pose bits, and every face, edge and vertex by serial with all
+/// links and exact loci), cameras and lights.
+fn assert_same_world(a: &World, b: &World) {
+    assert_eq!(a.revision(), b.revision(), "revision");
+    assert_eq!(a.next_serial(), b.next_serial(), "next serial");
+    assert_eq!(a.root(), b.root(), "root");
+    let ids = |w: &World| w.tree().iter().map(|(id, _)| id).collect::<Vec<_>>();
+    assert_eq!(ids(a), ids(b), "body ids");
+    let bits = |p: winged::model::Pose| {
+        let mut v: Vec<u64> = p.position.to_array().iter().map(|x| x.to_bits()).collect();
+        v.extend(p.rotation.to_array().iter().map(|x| x.to_bits()));
+        v
+    };
+    for (id, na) in a.tree().iter() {
+        let nb = b.node(id).unwrap();
+        assert_eq!(na.name, nb.name, "body {id}: name");
+        assert_eq!(na.supart, nb.supart, "body {id}: supart");
+        assert_eq!(na.parts, nb.parts, "body {id}: parts");
+        assert_eq!(bits(na.pose), bits(nb.pose), "body {id}: pose");
+        assert_eq!(dump(&na.body), dump(&nb.body), "body {id}: geometry");
+        assert_eq!(
+            a.find_by_name(na.name.as_deref().unwrap_or("")),
+            b.find_by_name(na.name.as_deref().unwrap_or(""))
+        );
+    }
+    let cams = |w: &World| {
+        w.cameras()
+            .map(|(n, c)| (n.to_owned(), bits(c.pose), format!("{:?}", c.intrinsics)))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(cams(a), cams(b), "cameras");
+    let lights = |w: &World| {
+        w.lights()
+            .map(|(n, l)| format!("{n}: {l:?}"))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(lights(a), lights(b), "lights");
+    // Everything, down to free lists and serial indexes.
+    assert_eq!(snapshot::encode(a), snapshot::encode(b), "encoded worlds");
+}
+
+/// The validator passes on every body, and each body that was a solid still is.
+fn assert_valid_like(recovered: &World, original: &World) {
+    for (id, n) in recovered.bodies() {
+        let r = check_topology(&n.body);
+        assert!(r.is_ok(), "body {id}: {r}");
+        let was_solid = check_solid(original.body(id).unwrap(), 1e-9).is_ok();
+        if was_solid {
+            let r = check_solid(&n.body, 1e-9);
+            assert!(r.is_ok(), "body {id}: {r}");
+        }
+    }
+    assert!(recovered.tree().check().is_empty());
+    check_world(recovered).unwrap();
+}
+
+/// Random server-like writes on the bodies in `bodies`: poses, transforms, ESPLIT/KLEV
+/// and MKEV/KLEV pairs, cameras, and now and then a refused edit.
+fn random_writes(run: &mut Run, bodies: &[u64], n: usize, seed: u64) {
+    let mut rng = Rng(seed);
+    for _ in 0..n {
+        let b = bodies[rng.below(bodies.len())];
+        match rng.below(10) {
+            0..=2 => {
+                let h = rng.f(-1.5, 1.5);
+                run.ok(patch(b, json!({"pose": {"position": [rng.f(-2.0, 2.0), rng.f(-2.0, 2.0), rng.f(0.0, 1.0)],
+                                                 "rotation": [0.0, h.sin(), 0.0, h.cos()]}})));
+            }
+            3 => {
+                run.ok(transform(
+                    b,
+                    json!({"op": "rotate", "axis": [rng.f(-1.0, 1.0), 1.0, 0.5],
+                                           "angle_deg": rng.f(-30.0, 30.0), "frame": "body"}),
+                ));
+            }
+            4 | 5 => {
+                let edges = run.edges(b);
+                let e = edges[rng.below(edges.len())];
+                let pos = [rng.f(-1.0, 1.0), rng.f(-1.0, 1.0), rng.f(-1.0, 1.0)];
+                let o = run.ok(euler(
+                    b,
+                    json!({"op": "esplit", "edge": e, "position": pos}),
+                ));
+                run.ok(euler(b, json!({"op": "klev", "vertex": o.vertex.unwrap()})));
+            }
+            6 => {
+                let b_ = run.body(b);
+                let f = b_.faces().nth(rng.below(b_.face_count())).unwrap();
+                let face = b_.face_serial(f).get();
+                let vertex = run.face_vertices(b, face)[0];
+                let o = run.ok(euler(
+                    b,
+                    json!({"op": "mkev", "face": face, "vertex": vertex}),
+                ));
+                run.ok(euler(b, json!({"op": "klev", "vertex": o.vertex.unwrap()})));
+            }
+            7 => {
+                let a = rng.f(0.0, std::f64::consts::TAU);
+                run.ok(json!({"edit": "put_camera", "name": format!("cam{}", rng.below(3)),
+                              "camera": {"look_at": {"eye": [3.0 * a.cos(), 3.0 * a.sin(), 1.5], "target": [0.0, 0.0, 0.5]},
+                                         "intrinsics": {"width": 640, "height": 480, "fx": 600.0, "fy": 600.0, "cx": 320.0, "cy": 240.0}}}));
+            }
+            8 => {
+                run.ok(transform(
+                    b,
+                    json!({"op": "translate", "vector": [rng.f(-0.1, 0.1), 0.0, rng.f(-0.1, 0.1)]}),
+                ));
+            }
+            _ => {
+                // A vertex of a box corner has three edges: KLEV refuses it.
+                let b_ = run.body(b);
+                let v = b_.vertices().find(|&v| b_.valence(v) > 2).unwrap();
+                let vertex = b_.vertex_serial(v).get();
+                run.refused(euler(b, json!({"op": "klev", "vertex": vertex})));
+            }
+        }
+    }
+}
+
+/// A world built by every kind of edit, accepted and refused.
+fn varied_run() -> Run {
+    let mut run = Run::new();
+    // Every shape kind.
+    let bx = id(&run.ok(create(
+        "box",
+        json!({"type": "box", "size": [2.0, 2.0, 2.0]}),
+    )));
+    let tet = id(&run.ok(create("tet", json!({"type": "tetrahedron", "radius": 1.0}))));
+    run.ok(create_at(
+        "prism",
+        [0.0, 3.0, 0.0],
+        json!({"type": "prism", "polygon": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], "height": 0.5}),
+    ));
+    run.ok(create("pyramid", json!({"type": "pyramid", "polygon": [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]], "height": 1.5})));
+    let cyl = id(&run.ok(create(
+        "cyl",
+        json!({"type": "cylinder", "radius": 0.5, "height": 1.0, "segments": 12}),
+    )));
+    run.ok(create(
+        "cone",
+        json!({"type": "cone", "radius": 0.5, "height": 1.0, "segments": 9}),
+    ));
+    run.ok(create(
+        "sphere",
+        json!({"type": "sphere", "radius": 1.0, "segments": 8, "rings": 5}),
+    ));
+    run.ok(create("torus", json!({"type": "torus", "major_radius": 2.0, "minor_radius": 0.5, "segments": 8, "rings": 6})));
+    let poly = id(&run.ok(create(
+        "poly",
+        json!({"type": "polyhedron",
+        "vertices": [[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]],
+        "faces": [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]]}),
+    )));
+    let sem = run.ok(
+        json!({"edit": "create_body", "shape": {"type": "seminal", "position": [0.0, 0.0, 5.0]}}),
+    );
+    // Refused creates.
+    run.refused(create(
+        "box",
+        json!({"type": "box", "size": [1.0, 1.0, 1.0]}),
+    ));
+    run.refused(create("bad", json!({"type": "sphere", "radius": -1.0})));
+    run.refused(create(
+        "bad",
+        json!({"type": "polyhedron", "vertices": [[0.0, 0.0, 0.0]], "faces": [[0, 0, 0]]}),
+    ));
+    run.refused(json!({"edit": "create_body", "parent": 999_999, "shape": {"type": "box", "size": [1.0, 1.0, 1.0]}}));
+
+    // MKEV, MKFE, KLFE, KLEV from the seminal body: a wire, a lamina, and back.
+    let (s, f0, v0) = (id(&sem), sem.face.unwrap(), sem.vertex.unwrap());
+    let a = run.ok(euler(
+        s,
+        json!({"op": "mkev", "face": f0, "vertex": v0, "position": [1.0, 0.0, 5.0]}),
+    ));
+    let b = run.ok(euler(
+        s,
+        json!({"op": "mkev", "face": f0, "vertex": a.vertex.unwrap(), "position": [1.0, 1.0, 5.0]}),
+    ));
+    let c = run.ok(euler(
+        s,
+        json!({"op": "mkfe", "v1": b.vertex.unwrap(), "face": f0, "v2": v0}),
+    ));
+    run.ok(euler(s, json!({"op": "klfe", "edge": c.edge.unwrap()})));
+    run.ok(euler(s, json!({"op": "klev", "vertex": b.vertex.unwrap()})));
+    run.refused(euler(s, json!({"op": "klfe", "edge": c.edge.unwrap()})));
+
+    // ESPLIT, MKFE, KLFE, KLEV, MKEV, KLVE, INVERT on the box.
+    let top = run.face_towards(bx, [0.0, 0.0, 1.0]);
+    let e0 = run.face_edges(bx, top)[0];
+    let split = run.ok(euler(bx, json!({"op": "esplit", "edge": e0})));
+    let vn = split.vertex.unwrap();
+    let ring = run.face_vertices(bx, top);
+    let at = ring.iter().position(|&v| v == vn).unwrap();
+    let across = ring[(at + 2) % ring.len()];
+    let cut = run.ok(euler(
+        bx,
+        json!({"op": "mkfe", "v1": vn, "face": top, "v2": across}),
+    ));
+    // KLFE reports the face that survives.
+    let top = run
+        .ok(euler(bx, json!({"op": "klfe", "edge": cut.edge.unwrap()})))
+        .face
+        .unwrap();
+    run.ok(euler(bx, json!({"op": "klev", "vertex": vn})));
+    let ring = run.face_vertices(bx, top);
+    let spur = run.ok(euler(
+        bx,
+        json!({"op": "mkev", "face": top, "vertex": ring[0], "position": [0.1, 0.1, 1.0]}),
+    ));
+    run.ok(euler(bx, json!({"op": "klve", "edge": spur.edge.unwrap()})));
+    let e1 = run.edges(bx)[3];
+    run.ok(euler(bx, json!({"op": "invert", "edge": e1})));
+    run.ok(euler(bx, json!({"op": "invert", "edge": e1})));
+    run.refused(euler(bx, json!({"op": "esplit", "edge": 999_999})));
+    run.refused(euler(
+        bx,
+        json!({"op": "mkfe", "v1": ring[0], "face": top, "v2": ring[0]}),
+    ));
+
+    // GLUE two boxes into one, then UNGLUE them along the seam.
+    let ga = id(&run.ok(create(
+        "glue a",
+        json!({"type": "box", "size": [2.0, 2.0, 2.0]}),
+    )));
+    let gb = id(&run.ok(create_at(
+        "glue b",
+        [2.0, 0.0, 0.0],
+        json!({"type": "box", "size": [2.0, 2.0, 2.0]}),
+    )));
+    let fa = run.face_towards(ga, [1.0, 0.0, 0.0]);
+    let fb = run.face_towards(gb, [-1.0, 0.0, 0.0]);
+    let seam = run.face_edges(ga, fa);
+    let glued = run.ok(euler(ga, json!({"op": "glue", "face1": fa, "face2": fb})));
+    assert_eq!(glued.killed, vec![gb]);
+    let cut = run.ok(euler(ga, json!({"op": "unglue", "edges": seam})));
+    assert!(cut.split_off.is_some());
+    // GLUEFF: a tube between two boxes.
+    let ta = id(&run.ok(create_at(
+        "tube a",
+        [0.0, 6.0, 0.0],
+        json!({"type": "box", "size": [1.0, 1.0, 1.0]}),
+    )));
+    let tb = id(&run.ok(create_at(
+        "tube b",
+        [0.0, 9.0, 0.0],
+        json!({"type": "box", "size": [1.0, 1.0, 1.0]}),
+    )));
+    let (f1, f2) = (
+        run.face_towards(ta, [0.0, 1.0, 0.0]),
+        run.face_towards(tb, [0.0, -1.0, 0.0]),
+    );
+    let tube = run.ok(euler(ta, json!({"op": "glueff", "face1": f1, "face2": f2})));
+    assert!(!tube.new_edges.is_empty());
+    assert_eq!(tube.killed, vec![tb]);
+
+    // Patches: rename, unname, re-parent, pose; cycles, duplicates and the root refused.
+    let p = id(&run.ok(create_at(
+        "P",
+        [5.0, 0.0, 0.0],
+        json!({"type": "box", "size": [1.0, 1.0, 1.0]}),
+    )));
+    let q = id(&run.ok(json!({"edit": "create_body", "name": "Q", "parent": p, "shape": {"type": "box", "size": [0.5, 0.5, 0.5]},
+                              "pose": {"position": [0.0, 0.0, 1.0]}})));
+    let r = id(&run.ok(json!({"edit": "create_body", "name": "R", "parent": q, "shape": {"type": "tetrahedron", "radius": 0.3}})));
+    run.ok(patch(r, json!({"parent": p})));
+    run.ok(patch(r, json!({"parent": q, "name": "R2", "pose": {"position": [0.0, 0.5, 0.0], "rotation": [0.0, 0.0, 0.6, 0.8]}})));
+    run.ok(patch(q, json!({"name": null})));
+    run.ok(patch(cyl, json!({"parent": bx})));
+    run.refused(patch(p, json!({"parent": r})));
+    run.refused(patch(r, json!({"name": "P"})));
+    run.refused(patch(1, json!({"name": "root"})));
+    run.refused(patch(
+        q,
+        json!({"pose": {"rotation": [0.0, 0.0, 0.0, 0.0]}}),
+    ));
+    run.refused(patch(q, json!({"name": "ok", "parent": 999_999})));
+
+    // Transforms of bodies, faces and vertices, in both frames.
+    run.ok(transform(
+        tet,
+        json!({"op": "translate", "vector": [0.0, 0.0, 2.0]}),
+    ));
+    run.ok(transform(tet, json!({"op": "rotate", "axis": [0.0, 0.0, 1.0], "angle_deg": 30.0, "center": [1.0, 0.0, 0.0], "frame": "body"})));
+    run.ok(transform(poly, json!({"op": "dilate", "factor": 1.5})));
+    run.ok(transform(
+        poly,
+        json!({"op": "reflect", "normal": [1.0, 0.0, 0.0]}),
+    ));
+    let pf = run
+        .body(poly)
+        .faces()
+        .next()
+        .map(|f| run.body(poly).face_serial(f).get())
+        .unwrap();
+    run.ok(transform(
+        poly,
+        json!({"op": "translate", "vector": [0.01, 0.02, 0.03], "target": pf}),
+    ));
+    let pv = run.face_vertices(poly, pf)[0];
+    run.ok(transform(poly, json!({"op": "rotate", "axis": [0.0, 1.0, 0.0], "angle_deg": 5.0, "target": pv, "frame": "body"})));
+    run.refused(transform(poly, json!({"op": "dilate", "factor": 0.0})));
+    run.refused(transform(
+        poly,
+        json!({"op": "translate", "vector": [1.0, 0.0, 0.0], "target": e0}),
+    ));
+
+    // Sweeps, dual, evert, copy.
+    let sw = id(&run.ok(create_at(
+        "sweep",
+        [0.0, -5.0, 0.0],
+        json!({"type": "box", "size": [1.0, 1.0, 1.0]}),
+    )));
+    let up = run.face_towards(sw, [0.0, 0.0, 1.0]);
+    let cap = run.ok(json!({"edit": "sweep", "body": sw, "req": {"face": up, "kind": "prism", "distance": 0.5}})).face.unwrap();
+    run.ok(json!({"edit": "sweep", "body": sw, "req": {"face": cap, "kind": "cw_prismoid", "distance": 0.3, "scale": 0.5}}));
+    let side = run.face_towards(sw, [1.0, 0.0, 0.0]);
+    run.ok(json!({"edit": "sweep", "body": sw, "req": {"face": side, "kind": "ccw_prismoid", "distance": 0.2, "scale": 0.8}}));
+    let back = run.face_towards(sw, [-1.0, 0.0, 0.0]);
+    run.ok(json!({"edit": "sweep", "body": sw, "req": {"face": back, "kind": "pyramid", "distance": 0.4}}));
+    let du = id(&run.ok(create_at(
+        "dual",
+        [0.0, 0.0, -5.0],
+        json!({"type": "box", "size": [1.0, 1.0, 1.0]}),
+    )));
+    run.ok(json!({"edit": "dual", "body": du}));
+    run.ok(json!({"edit": "evert", "body": tet}));
+    run.ok(json!({"edit": "evert", "body": tet}));
+    run.ok(json!({"edit": "copy", "body": bx, "name": "box copy"}));
+    run.ok(json!({"edit": "copy", "body": poly}));
+    run.refused(json!({"edit": "copy", "body": bx, "name": "box copy"}));
+    run.refused(json!({"edit": "copy", "body": 1}));
+
+    // Cameras and lights.
+    let intr =
+        json!({"width": 640, "height": 480, "fx": 600.0, "fy": 600.0, "cx": 320.0, "cy": 240.0});
+    run.ok(json!({"edit": "put_camera", "name": "eye", "camera": {"pose": {"position": [0.0, -3.0, 1.0], "rotation": [0.6, 0.0, 0.0, 0.8]}, "intrinsics": intr}}));
+    run.ok(json!({"edit": "put_camera", "name": "eye2", "camera": {"look_at": {"eye": [2.0, 2.0, 2.0], "target": [0.0, 0.0, 0.0]},
+                  "baumgart": {"focal": 35.0, "ldx": 640, "ldy": 480, "pdx": 36.0, "pdy": 27.0}}}));
+    run.ok(json!({"edit": "put_camera", "name": "eye", "camera": {"look_at": {"eye": [1.0, -4.0, 2.0], "target": [0.0, 0.0, 0.5]}, "intrinsics": intr}}));
+    run.refused(json!({"edit": "put_camera", "name": "both", "camera": {"pose": {}, "look_at": {"eye": [1.0, 0.0, 0.0], "target": [0.0, 0.0, 0.0]}, "intrinsics": intr}}));
+    run.refused(json!({"edit": "put_camera", "name": " spaced ", "camera": {"pose": {}, "intrinsics": intr}}));
+    run.ok(json!({"edit": "delete_camera", "name": "eye2"}));
+    run.refused(json!({"edit": "delete_camera", "name": "eye2"}));
+    run.ok(json!({"edit": "put_light", "name": "sun", "light": {"type": "sun", "direction": [-0.3, 0.5, -1.0]}}));
+    run.ok(json!({"edit": "put_light", "name": "lamp", "light": {"type": "point", "position": [0.0, 0.0, 3.0], "intensity": 0.7}}));
+    run.ok(json!({"edit": "put_light", "name": "lamp", "light": {"type": "point", "position": [1.0, 0.0, 3.0], "intensity": 0.5}}));
+    run.refused(json!({"edit": "put_light", "name": "dark", "light": {"type": "sun", "direction": [0.0, 0.0, 0.0]}}));
+    run.ok(json!({"edit": "delete_light", "name": "sun"}));
+    run.refused(json!({"edit": "delete_light", "name": "sun"}));
+
+    // A long stretch of server-like writes, then deletes (a body with its parts, too).
+    random_writes(&mut run, &[bx, tet, cyl, p, q, r, sw], 1500, 7);
+    let o = run.ok(json!({"edit": "delete_body", "body": p}));
+    assert_eq!(o.killed.len(), 3, "P with Q and R");
+    run.refused(json!({"edit": "delete_body", "body": tb}));
+    run.ok(json!({"edit": "delete_body", "body": ta}));
+    run.refused(json!({"edit": "delete_body", "body": p}));
+    run.refused(json!({"edit": "delete_body", "body": 1}));
+    random_writes(&mut run, &[bx, tet, cyl], 300, 11);
+    run
+}
+
+// ------------------------------------------------------------------ determinism
+
+#[test]
+fn a_journaled_edit_sequence_replays_to_the_same_world_entity_by_entity() {
+    let mut run = varied_run();
+    assert!(
+        run.refused > 100,
+        "refused edits were tried: {}",
+        run.refused
+    );
+    let (mut store, rec) = run.recover();
+    assert_eq!(rec.snapshot, None);
+    assert_eq!(rec.replayed, run.world.revision());
+    let conn = rusqlite::Connection::open(store.journal_path()).unwrap();
+    let rows: i64 = conn
+        .query_row("SELECT count(*) FROM journal", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(
+        rows as u64,
+        run.world.revision(),
+        "refused edits are not journaled"
+    );
+    assert_eq!(store.journal_len(), run.world.revision());
+    assert_same_world(&run.world, &rec.world);
+    assert_valid_like(&rec.world, &run.world);
+
+    // One more edit on each world makes the same ids.
+    let mut recovered = rec.world;
+    let next = [
+        create(
+            "after",
+            json!({"type": "cylinder", "radius": 0.2, "height": 0.4, "segments": 5}),
+        ),
+        euler(
+            run.log[0].2.id.unwrap(),
+            json!({"op": "esplit", "edge": run.edges(run.log[0].2.id.unwrap())[0]}),
+        ),
+    ];
+    for e in next {
+        let edit: Edit = serde_json::from_value(e).unwrap();
+        let a = apply(&mut run.world, &edit).unwrap();
+        let b = apply(&mut recovered, &edit).unwrap();
+        assert_eq!(a, b);
+        assert!(a.id.is_some());
+        store.append(&[(recovered.revision(), &edit)]).unwrap();
+    }
+    assert_same_world(&run.world, &recovered);
+}
+
+// ------------------------------------------------------------------ snapshots
+
+/// A run with a few bodies and `n` random writes.
+fn plain_run(n: usize, seed: u64) -> (Run, Vec<u64>) {
+    let mut run = Run::new();
+    let mut bodies = Vec::new();
+    for i in 0..6 {
+        let shape = if i % 2 == 0 {
+            json!({"type": "box", "size": [1.0, 0.5, 0.25]})
+        } else {
+            json!({"type": "cylinder", "radius": 0.3, "height": 0.5, "segments": 7})
+        };
+        bodies.push(id(&run.ok(create(&format!("b{i}"), shape))));
+    }
+    random_writes(&mut run, &bodies, n, seed);
+    run.flush();
+    (run, bodies)
+}
+
+#[test]
+fn a_snapshot_plus_the_journal_tail_recovers_the_same_world() {
+    let (mut run, bodies) = plain_run(300, 1);
+    let snap = write_snapshot(run.dir.path(), &run.world).unwrap();
+    assert_eq!(snap.revision, run.world.revision());
+    assert_eq!(
+        snap.path.file_name().unwrap().to_str().unwrap(),
+        format!("{:012}.snap", snap.revision)
+    );
+    assert_eq!(snap.bytes, std::fs::metadata(&snap.path).unwrap().len());
+    random_writes(&mut run, &bodies, 200, 2);
+    let (_, rec) = run.recover();
+    assert_eq!(rec.snapshot, Some(snap.revision));
+    assert_eq!(rec.replayed, run.world.revision() - snap.revision);
+    assert_same_world(&run.world, &rec.world);
+    assert_valid_like(&rec.world, &run.world);
+}
+
+#[test]
+fn a_snapshot_round_trip_is_bit_exact() {
+    let run = varied_run();
+    let bytes = snapshot::encode(&run.world);
+    let back = snapshot::decode(&bytes).unwrap();
+    assert_eq!(snapshot::encode(&back), bytes);
+    assert_same_world(&run.world, &back);
+    let written = write_snapshot(run.dir.path(), &run.world).unwrap();
+    assert_eq!(std::fs::read(&written.path).unwrap(), bytes);
+    assert_same_world(&run.world, &read_snapshot(&written.path).unwrap());
+}
+
+#[test]
+fn only_the_newest_two_snapshots_are_kept() {
+    let (mut run, bodies) = plain_run(20, 3);
+    let mut revisions = Vec::new();
+    for k in 0..4 {
+        let s = write_snapshot(run.dir.path(), &run.world).unwrap();
+        revisions.push(s.revision);
+        if k > 0 {
+            assert_eq!(s.oldest_kept, revisions[k - 1]);
+        }
+        random_writes(&mut run, &bodies, 5, 10 + k as u64);
+    }
+    let kept: Vec<u64> = run
+        .store
+        .snapshots()
+        .unwrap()
+        .iter()
+        .map(|s| s.revision)
+        .collect();
+    assert_eq!(kept, revisions[2..].to_vec());
+}
+
+/// Flips one payload byte of the snapshot file at `path`.
+fn flip_a_byte(path: &Path) {
+    let mut bytes = std::fs::read(path).unwrap();
+    let at = bytes.len() / 2;
+    bytes[at] ^= 0x10;
+    std::fs::write(path, bytes).unwrap();
+}
+
+fn truncate(path: &Path) {
+    let bytes = std::fs::read(path).unwrap();
+    std::fs::write(path, &bytes[..bytes.len() - 100]).unwrap();
+}
+
+#[test]
+fn a_damaged_newest_snapshot_falls_back_to_the_older_one() {
+    for damage in [flip_a_byte as fn(&Path), truncate] {
+        let (mut run, bodies) = plain_run(100, 4);
+        let older = write_snapshot(run.dir.path(), &run.world).unwrap();
+        random_writes(&mut run, &bodies, 50, 5);
+        let newer = write_snapshot(run.dir.path(), &run.world).unwrap();
+        random_writes(&mut run, &bodies, 50, 6);
+        damage(&newer.path);
+        assert!(read_snapshot(&newer.path).is_err());
+        let (_, rec) = run.recover();
+        assert_eq!(rec.snapshot, Some(older.revision));
+        assert_eq!(rec.skipped_snapshots, 1);
+        assert_same_world(&run.world, &rec.world);
+    }
+}
+
+#[test]
+fn a_damaged_snapshot_whose_journal_was_pruned_is_a_clear_error() {
+    let (mut run, bodies) = plain_run(100, 8);
+    let older = write_snapshot(run.dir.path(), &run.world).unwrap();
+    random_writes(&mut run, &bodies, 50, 9);
+    let newer = write_snapshot(run.dir.path(), &run.world).unwrap();
+    assert_eq!(newer.oldest_kept, older.revision);
+    random_writes(&mut run, &bodies, 50, 10);
+    run.flush();
+    // Pruning through the newest snapshot (instead of `oldest_kept`) leaves nothing to
+    // bridge from the older one.
+    let deleted = run.store.prune_through(newer.revision).unwrap();
+    assert_eq!(deleted, newer.revision);
+    assert_eq!(run.store.first_revision(), Some(newer.revision + 1));
+    let (_, rec) = run.recover();
+    assert_eq!(rec.snapshot, Some(newer.revision));
+    assert_same_world(&run.world, &rec.world);
+
+    flip_a_byte(&newer.path);
+    let mut store = Store::open(run.dir.path(), options()).unwrap();
+    match store.recover(|_, _, _, _| {}) {
+        Err(StoreError::Gap {
+            snapshot,
+            expected,
+            found,
+            skipped_snapshots,
+            ..
+        }) => {
+            assert_eq!(snapshot, Some(older.revision));
+            assert_eq!(expected, older.revision + 1);
+            assert_eq!(found, newer.revision + 1);
+            assert_eq!(skipped_snapshots, 1);
+        }
+        other => panic!("expected a gap, got {other:?}"),
+    }
+    let msg = store.recover(|_, _, _, _| {}).unwrap_err().to_string();
+    assert!(
+        msg.contains("is missing") && msg.contains("unreadable snapshot"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn a_damaged_snapshot_newer_than_everything_else_is_not_silently_lost() {
+    let (mut run, bodies) = plain_run(60, 12);
+    let older = write_snapshot(run.dir.path(), &run.world).unwrap();
+    random_writes(&mut run, &bodies, 30, 13);
+    run.flush();
+    let newer = write_snapshot(run.dir.path(), &run.world).unwrap();
+    run.store.prune_through(newer.revision).unwrap();
+    assert_eq!(run.store.journal_len(), 0);
+    truncate(&newer.path);
+    let mut store = Store::open(run.dir.path(), options()).unwrap();
+    match store.recover(|_, _, _, _| {}) {
+        Err(StoreError::Unrecoverable {
+            newest, recovered, ..
+        }) => {
+            assert_eq!((newest, recovered), (newer.revision, older.revision));
+        }
+        other => panic!("expected an unrecoverable directory, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_snapshot_with_a_valid_checksum_but_an_unsound_world_is_refused() {
+    let (run, _) = plain_run(10, 14);
+    // Break one edge link (a wing naming a slot that does not exist) in a world that
+    // otherwise decodes.
+    let mut v = serde_json::to_value(&run.world).unwrap();
+    let nodes = v["tree"]["nodes"].as_object_mut().unwrap();
+    let (_, node) = nodes.iter_mut().find(|(k, _)| k.as_str() != "1").unwrap();
+    node["body"]["edges"]["items"][0]["cw"][0] = json!(4000);
+    let broken: World = serde_json::from_value(v).unwrap();
+    assert!(check_world(&broken).is_err());
+    let bytes = snapshot::encode(&broken);
+    assert!(matches!(
+        snapshot::decode(&bytes),
+        Err(SnapshotError::Invalid(_))
+    ));
+
+    // An arena whose free list names a live slot does not even decode.
+    let mut v = serde_json::to_value(&run.world).unwrap();
+    let nodes = v["tree"]["nodes"].as_object_mut().unwrap();
+    let (_, node) = nodes.iter_mut().find(|(k, _)| k.as_str() != "1").unwrap();
+    node["body"]["faces"]["free"] = json!([0]);
+    assert!(serde_json::from_value::<World>(v).is_err());
+}
+
+#[test]
+fn snapshot_header_checks() {
+    let (run, _) = plain_run(5, 15);
+    let good = snapshot::encode(&run.world);
+    let mut bad_magic = good.clone();
+    bad_magic[0] = b'X';
+    assert!(matches!(
+        snapshot::decode(&bad_magic),
+        Err(SnapshotError::BadMagic)
+    ));
+    let mut newer = good.clone();
+    newer[8] = 9;
+    assert!(matches!(
+        snapshot::decode(&newer),
+        Err(SnapshotError::UnsupportedVersion { found: 9 })
+    ));
+    let mut revision = good.clone();
+    revision[12] ^= 1;
+    assert!(matches!(
+        snapshot::decode(&revision),
+        Err(SnapshotError::Checksum { .. })
+    ));
+    assert!(matches!(
+        snapshot::decode(&good[..good.len() - 1]),
+        Err(SnapshotError::Length { .. })
+    ));
+    assert!(matches!(
+        snapshot::decode(&good[..10]),
+        Err(SnapshotError::Length { .. })
+    ));
+    // A file renamed to another revision's name is not taken for it.
+    let snaps = snapshot::snapshots_dir(run.dir.path());
+    let wrong = snaps.join(snapshot::file_name(run.world.revision() + 5));
+    std::fs::write(&wrong, &good).unwrap();
+    assert!(matches!(
+        read_snapshot(&wrong),
+        Err(SnapshotError::Revision(_))
+    ));
+}
+
+// ------------------------------------------------------------------ the journal
+
+#[test]
+fn a_hole_in_the_journal_is_refused() {
+    let (run, _) = plain_run(30, 16);
+    let conn = rusqlite::Connection::open(run.store.journal_path()).unwrap();
+    conn.execute("DELETE FROM journal WHERE revision = 17", [])
+        .unwrap();
+    let mut store = Store::open(run.dir.path(), options()).unwrap();
+    let err = store.recover(|_, _, _, _| {}).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            StoreError::Gap {
+                expected: 17,
+                found: 18,
+                snapshot: None,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    // A journal that starts after revision 1 with no snapshot before it.
+    conn.execute("DELETE FROM journal WHERE revision < 17", [])
+        .unwrap();
+    let mut store = Store::open(run.dir.path(), options()).unwrap();
+    let err = store.recover(|_, _, _, _| {}).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            StoreError::Gap {
+                expected: 1,
+                found: 18,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("revision 1 is missing"), "{err}");
+}
+
+#[test]
+fn an_unreadable_or_refused_entry_stops_recovery_with_its_revision() {
+    let (run, _) = plain_run(10, 17);
+    let conn = rusqlite::Connection::open(run.store.journal_path()).unwrap();
+    conn.execute(
+        "UPDATE journal SET edit = '{\"edit\": \"nonsense\"}' WHERE revision = 9",
+        [],
+    )
+    .unwrap();
+    let mut store = Store::open(run.dir.path(), options()).unwrap();
+    let err = store.recover(|_, _, _, _| {}).unwrap_err();
+    assert!(
+        matches!(err, StoreError::Decode { revision: 9, .. }),
+        "{err:?}"
+    );
+    conn.execute(
+        "UPDATE journal SET edit = '{\"edit\": \"delete_body\", \"body\": 424242}' WHERE revision = 9",
+        [],
+    )
+    .unwrap();
+    let err = store.recover(|_, _, _, _| {}).unwrap_err();
+    assert!(
+        matches!(err, StoreError::Refused { revision: 9, .. }),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn a_failed_append_leaves_none_of_its_batch() {
+    let (mut run, bodies) = plain_run(10, 18);
+    let last = run.world.revision();
+    // Make SQLite fail on the third entry of the next batch.
+    let conn = rusqlite::Connection::open(run.store.journal_path()).unwrap();
+    conn.execute_batch(&format!(
+        "CREATE TRIGGER fail BEFORE INSERT ON journal WHEN NEW.revision = {}
+         BEGIN SELECT RAISE(ABORT, 'refused by test'); END;",
+        last + 3
+    ))
+    .unwrap();
+    let mut world = run.world.clone();
+    let mut batch = Vec::new();
+    for (k, &body) in bodies.iter().enumerate().take(5) {
+        let edit: Edit = serde_json::from_value(patch(
+            body,
+            json!({"pose": {"position": [k as f64, 0.0, 0.0]}}),
+        ))
+        .unwrap();
+        apply(&mut world, &edit).unwrap();
+        batch.push((world.revision(), edit));
+    }
+    let entries: Vec<(u64, &Edit)> = batch.iter().map(|(r, e)| (*r, e)).collect();
+    let err = run.store.append(&entries).unwrap_err();
+    assert!(matches!(err, StoreError::Sqlite { .. }), "{err:?}");
+    assert!(err.to_string().contains("refused by test"), "{err}");
+    let count: i64 = conn
+        .query_row(
+            "SELECT count(*) FROM journal WHERE revision > ?1",
+            [last as i64],
+            |r| r.get(0),
+        )
+        .unwrap();
+    assert_eq!(count, 0, "none of the batch is in the journal");
+    assert_eq!(run.store.last_revision(), Some(last));
+    // Once the cause is gone the same batch goes in.
+    conn.execute_batch("DROP TRIGGER fail").unwrap();
+    run.store.append(&entries).unwrap();
+    assert_eq!(run.store.last_revision(), Some(last + 5));
+    drop(run.store);
+    let mut store = Store::open(run.dir.path(), options()).unwrap();
+    let rec = store.recover(|_, _, _, _| {}).unwrap();
+    assert_same_world(&world, &rec.world);
+}
+
+#[test]
+fn appends_must_continue_the_journal() {
+    let (mut run, bodies) = plain_run(5, 19);
+    let last = run.world.revision();
+    let edit: Edit = serde_json::from_value(patch(
+        bodies[0],
+        json!({"pose": {"position": [1.0, 2.0, 3.0]}}),
+    ))
+    .unwrap();
+    for (entries, expected, found) in [
+        (vec![(last + 2, &edit)], last + 1, last + 2),
+        (vec![(last, &edit)], last + 1, last),
+        (
+            vec![(last + 1, &edit), (last + 3, &edit)],
+            last + 2,
+            last + 3,
+        ),
+    ] {
+        match run.store.append(&entries) {
+            Err(StoreError::OutOfOrder {
+                expected: e,
+                found: f,
+            }) => {
+                assert_eq!((e, f), (expected, found));
+            }
+            other => panic!("expected out of order, got {other:?}"),
+        }
+    }
+    assert_eq!(run.store.last_revision(), Some(last));
+}
+
+#[test]
+fn a_newer_journal_format_or_a_foreign_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    drop(Store::open(dir.path(), options()).unwrap());
+    let path = dir.path().join("journal.db");
+    let conn = rusqlite::Connection::open(&path).unwrap();
+    conn.execute(
+        "UPDATE meta SET value = 99 WHERE key = 'format_version'",
+        [],
+    )
+    .unwrap();
+    drop(conn);
+    match Store::open(dir.path(), options()) {
+        Err(StoreError::UnsupportedVersion {
+            found, supported, ..
+        }) => assert_eq!((found, supported), (99, 1)),
+        other => panic!("expected an unsupported version, got {:?}", other.err()),
+    }
+    let other = tempfile::tempdir().unwrap();
+    std::fs::write(other.path().join("journal.db"), vec![7u8; 8192]).unwrap();
+    let err = Store::open(other.path(), options()).err().unwrap();
+    assert!(matches!(err, StoreError::NotAJournal { .. }), "{err:?}");
+    let foreign = tempfile::tempdir().unwrap();
+    let conn = rusqlite::Connection::open(foreign.path().join("journal.db")).unwrap();
+    conn.execute_batch("CREATE TABLE t(x)").unwrap();
+    drop(conn);
+    let err = Store::open(foreign.path(), options()).err().unwrap();
+    assert!(matches!(err, StoreError::NotAJournal { .. }), "{err:?}");
+}
+
+#[test]
+fn a_fresh_directory_is_seeded_by_a_snapshot_and_journaling_continues_from_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut store = Store::open(
+        &dir.path().join("new").join("data"),
+        StoreOptions::default(),
+    )
+    .unwrap();
+    assert!(store.is_fresh().unwrap());
+    let demo = winged::server::demo::demo_world().unwrap();
+    store.write_snapshot(&demo).unwrap();
+    assert!(!store.is_fresh().unwrap());
+    let rec = store
+        .recover(|_, _, _, _| panic!("nothing to replay"))
+        .unwrap();
+    assert_eq!(rec.snapshot, Some(demo.revision()));
+    assert_same_world(&demo, &rec.world);
+    let mut world = rec.world;
+    let edit: Edit = serde_json::from_value(create(
+        "new",
+        json!({"type": "box", "size": [1.0, 1.0, 1.0]}),
+    ))
+    .unwrap();
+    apply(&mut world, &edit).unwrap();
+    store.append(&[(world.revision(), &edit)]).unwrap();
+    assert_eq!(store.journal_len(), 1);
+    drop(store);
+    let mut store = Store::open(
+        &dir.path().join("new").join("data"),
+        StoreOptions::default(),
+    )
+    .unwrap();
+    let rec = store.recover(|_, _, _, _| {}).unwrap();
+    assert_eq!(rec.replayed, 1);
+    assert_same_world(&world, &rec.world);
+}
+
+#[test]
+fn a_copied_snapshot_file_alone_restores_the_world() {
+    let (run, _) = plain_run(40, 20);
+    let snap = write_snapshot(run.dir.path(), &run.world).unwrap();
+    let restore = tempfile::tempdir().unwrap();
+    let snaps = snapshot::snapshots_dir(restore.path());
+    std::fs::create_dir_all(&snaps).unwrap();
+    std::fs::copy(&snap.path, snaps.join(snap.path.file_name().unwrap())).unwrap();
+    let mut store = Store::open(restore.path(), options()).unwrap();
+    let rec = store.recover(|_, _, _, _| {}).unwrap();
+    assert_same_world(&run.world, &rec.world);
+    assert_eq!(rec.replayed, 0);
+}
+
+#[test]
+fn pruning_keeps_recovery_exact_and_shrinks_the_journal() {
+    let (mut run, bodies) = plain_run(200, 21);
+    let first = write_snapshot(run.dir.path(), &run.world).unwrap();
+    random_writes(&mut run, &bodies, 100, 22);
+    run.flush();
+    let second = write_snapshot(run.dir.path(), &run.world).unwrap();
+    random_writes(&mut run, &bodies, 100, 23);
+    run.flush();
+    let before = run.store.journal_len();
+    let deleted = run.store.prune_through(second.oldest_kept).unwrap();
+    assert_eq!(deleted, first.revision);
+    assert_eq!(run.store.journal_len(), before - deleted);
+    assert_eq!(run.store.first_revision(), Some(first.revision + 1));
+    // Even with the newest snapshot damaged, the older one and the journal suffice.
+    flip_a_byte(&second.path);
+    let (_, rec) = run.recover();
+    assert_eq!(rec.snapshot, Some(first.revision));
+    assert_same_world(&run.world, &rec.world);
+}
+
+#[test]
+fn a_journal_that_ends_before_the_snapshot_is_dropped_and_appends_continue() {
+    let (run, bodies) = plain_run(30, 24);
+    // The snapshot is ahead of the journal: its last writes were never journaled.
+    let mut ahead = run.world.clone();
+    let edit: Edit = serde_json::from_value(patch(
+        bodies[1],
+        json!({"pose": {"position": [0.0, 0.0, 9.0]}}),
+    ))
+    .unwrap();
+    for _ in 0..3 {
+        apply(&mut ahead, &edit).unwrap();
+    }
+    write_snapshot(run.dir.path(), &ahead).unwrap();
+    drop(run.store);
+    let mut store = Store::open(run.dir.path(), options()).unwrap();
+    let rec = store.recover(|_, _, _, _| {}).unwrap();
+    assert_same_world(&ahead, &rec.world);
+    assert_eq!(store.journal_len(), 0);
+    let mut world = rec.world;
+    apply(&mut world, &edit).unwrap();
+    store.append(&[(world.revision(), &edit)]).unwrap();
+    let mut store = Store::open(run.dir.path(), options()).unwrap();
+    let rec = store.recover(|_, _, _, _| {}).unwrap();
+    assert_same_world(&world, &rec.world);
+}
+
+#[test]
+fn errors_name_the_file_and_the_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("a file");
+    std::fs::write(&file, b"not a directory").unwrap();
+    let err = Store::open(&file.join("data"), options()).err().unwrap();
+    let msg = err.to_string();
+    assert!(matches!(err, StoreError::Io { .. }), "{err:?}");
+    assert!(
+        msg.contains("a file") && msg.contains("creating data directory"),
+        "{msg}"
+    );
+    let err = write_snapshot(&file, &World::new()).unwrap_err();
+    assert!(err.to_string().contains("snapshot"), "{err}");
+}
+
+#[test]
+fn a_store_can_move_to_the_thread_that_owns_the_world() {
+    fn send<T: Send>() {}
+    send::<Store>();
+    send::<StoreError>();
+}
+
+#[test]
+fn the_journal_is_not_pruned_past_the_newest_snapshot() {
+    let (mut run, bodies) = plain_run(20, 25);
+    let last = run.world.revision();
+    let err = run.store.prune_through(5).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            StoreError::PruneBeyondSnapshot {
+                revision: 5,
+                newest: None
+            }
+        ),
+        "{err:?}"
+    );
+    let snap = write_snapshot(run.dir.path(), &run.world).unwrap();
+    random_writes(&mut run, &bodies, 5, 26);
+    run.flush();
+    let err = run.store.prune_through(snap.revision + 1).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains(&format!("newest snapshot is at {last}")),
+        "{err}"
+    );
+    assert_eq!(run.store.first_revision(), Some(1));
+    assert_eq!(
+        run.store.prune_through(snap.revision).unwrap(),
+        snap.revision
+    );
+}
