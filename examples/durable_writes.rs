@@ -75,7 +75,9 @@ fn main() {
         durability,
         data.display()
     );
-    println!("| clients | writes | writes/s | p50 ms | p99 ms | commits | entries per commit | ms per commit |");
+    println!(
+        "| clients | writes | writes/s | p50 ms | p99 ms | commits | entries per commit | ms per commit |"
+    );
     println!("|---|---|---|---|---|---|---|---|");
     for clients in [1usize, 8, 64] {
         // One body per client, so that the writes do not contend on a name or a body.

@@ -181,6 +181,27 @@ fn acknowledged_writes_survive_sigkill_and_revisions_continue() {
     assert_eq!(status, 201);
     assert!(made["revision"].as_u64().unwrap() > a.revision);
     assert!(made["id"].as_u64().unwrap() > a.max_id);
+    // The change history survived the kills: the last writes are still listed, in
+    // order, ending at the world's revision.
+    let since = a.revision - 10;
+    let (status, changes) = get(
+        &http,
+        &format!("{}/v1/world/changes?since={since}", server.base),
+    );
+    assert_eq!(status, 200);
+    assert_eq!(changes["resync"], false, "{changes}");
+    let revisions: Vec<u64> = changes["changes"]
+        .as_array()
+        .expect("changes")
+        .iter()
+        .map(|c| c["revision"].as_u64().expect("a revision"))
+        .collect();
+    let now = made["revision"].as_u64().unwrap();
+    assert_eq!(revisions, (since + 1..=now).collect::<Vec<_>>());
+    // One process per data directory: the running server holds it.
+    let (status, out) = process::run(&["check", "--data", &data_arg]);
+    assert!(!status.success());
+    assert!(out.contains("in use"), "{out}");
     // A clean stop writes a final snapshot.
     let status = server.stop();
     assert!(status.success(), "{status:?}");

@@ -2,9 +2,10 @@
 //! files), with snapshots written in the background every so many revisions and the
 //! journal pruned behind them.
 //!
-//! Recovery ([`open`]) loads the newest snapshot, replays the journal after it, and
-//! reads back the recent changes so `GET /v1/world/changes` keeps working across a
-//! restart.
+//! Each journal entry carries the [`Change`] it made, so that after a restart
+//! [`open`] reads the recent changes back and `GET /v1/world/changes` and the event
+//! stream continue where they were (up to `--history` revisions), even for revisions
+//! already folded into a snapshot.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -12,7 +13,7 @@ use std::sync::mpsc::{Receiver, TryRecvError};
 use std::time::Instant;
 
 use super::actor::{Checkpoint, Entry, Journal, Observer};
-use super::changes::{self, Change};
+use super::changes::Change;
 use crate::model::World;
 use crate::store::{SnapshotWritten, Store, StoreError, StoreOptions};
 
@@ -75,15 +76,9 @@ pub fn open(
         let w = store.write_snapshot(&world)?;
         tracing::info!(revision = w.revision, path = %w.path.display(), "seeded a fresh data directory");
     }
-    let mut recent: std::collections::VecDeque<Change> = std::collections::VecDeque::new();
-    let recovered = store.recover(|revision, edit, outcome, world| {
-        // Replayed entries carry no pre-image; describe them from the world after.
-        let change = changes::describe(revision, edit, outcome, &changes::Before::default(), world);
-        if recent.len() == history.max(1) {
-            recent.pop_front();
-        }
-        recent.push_back(change);
-    })?;
+    let recovered = store.recover(|_, _, _, _| {})?;
+    let revision = recovered.world.revision();
+    let recent = recent_changes(&store, revision, history)?;
     let last_snapshot = recovered.snapshot.unwrap_or(0);
     Ok(Opened {
         journal: Durable {
@@ -94,8 +89,29 @@ pub fn open(
             observer,
         },
         world: recovered.world,
-        recent: recent.into(),
+        recent,
     })
+}
+
+/// The stored changes of the last `history` revisions up to `revision`: the longest
+/// run of consecutive, readable ones that ends at `revision` (older entries may have
+/// been written without one).
+fn recent_changes(store: &Store, revision: u64, history: usize) -> Result<Vec<Change>, StoreError> {
+    let after = revision.saturating_sub(history as u64);
+    let mut run: Vec<Change> = Vec::new();
+    for (r, text) in store.recent_changes(after)? {
+        match serde_json::from_str::<Change>(&text) {
+            Ok(c) if c.revision == r && run.last().is_none_or(|p| p.revision + 1 == r) => {
+                run.push(c)
+            }
+            Ok(c) if c.revision == r => run = vec![c],
+            _ => run.clear(),
+        }
+    }
+    if run.last().is_some_and(|c| c.revision != revision) {
+        run.clear();
+    }
+    Ok(run)
 }
 
 impl Durable {
@@ -142,9 +158,16 @@ impl Journal for Durable {
     type Error = StoreError;
 
     fn append(&mut self, entries: &[Entry<'_>]) -> Result<(), StoreError> {
-        let batch: Vec<(u64, &super::edit::Edit)> =
-            entries.iter().map(|e| (e.revision, e.edit)).collect();
-        self.store.append(&batch)
+        let changes: Vec<Option<String>> = entries
+            .iter()
+            .map(|e| serde_json::to_string(e.change).ok())
+            .collect();
+        let batch: Vec<(u64, &super::edit::Edit, Option<&str>)> = entries
+            .iter()
+            .zip(&changes)
+            .map(|(e, c)| (e.revision, e.edit, c.as_deref()))
+            .collect();
+        self.store.append_with_changes(&batch)
     }
 
     fn committed(&mut self, world: &World) {

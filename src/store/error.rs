@@ -19,6 +19,15 @@ pub enum StoreError {
         #[source]
         source: std::io::Error,
     },
+    /// Another process (another server, or `winged check`) has the data directory open.
+    #[error(
+        "{} is in use by another process (a running server?); stop it first",
+        dir.display()
+    )]
+    InUse {
+        /// The data directory.
+        dir: PathBuf,
+    },
     /// SQLite refused an operation on the journal (disk full, locked, damaged file).
     #[error("journal {}: {what}: {source}", path.display())]
     Sqlite {

@@ -2,7 +2,7 @@
 //!
 //! ```sql
 //! CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);  -- format_version
-//! CREATE TABLE journal(revision INTEGER PRIMARY KEY, edit TEXT NOT NULL);
+//! CREATE TABLE journal(revision INTEGER PRIMARY KEY, edit TEXT NOT NULL, change TEXT);
 //! ```
 //!
 //! `edit` is the JSON of a [`Edit`], so the journal reads in the `sqlite3` shell:
@@ -134,7 +134,18 @@ impl Journal {
     /// process has appended meanwhile. Postcondition on `Ok`: every entry is committed.
     /// On `Err` none is.
     pub(crate) fn append(&mut self, entries: &[(u64, &Edit)]) -> Result<(), StoreError> {
-        let Some(&(first, _)) = entries.first() else {
+        let with: Vec<(u64, &Edit, Option<&str>)> =
+            entries.iter().map(|&(r, e)| (r, e, None)).collect();
+        self.append_with_changes(&with)
+    }
+
+    /// [`Self::append`], each entry with the description of what it changed (stored as
+    /// given, for [`recent_changes`] to read back after a restart).
+    pub(crate) fn append_with_changes(
+        &mut self,
+        entries: &[(u64, &Edit, Option<&str>)],
+    ) -> Result<(), StoreError> {
+        let Some(&(first, _, _)) = entries.first() else {
             return Ok(());
         };
         // Bounds every revision below by 2^63, so the sums below cannot overflow.
@@ -147,7 +158,7 @@ impl Journal {
                 found: first,
             });
         }
-        for (i, &(r, _)) in entries.iter().enumerate() {
+        for (i, &(r, _, _)) in entries.iter().enumerate() {
             let expected = first + i as u64;
             if r != expected {
                 return Err(StoreError::OutOfOrder { expected, found: r });
@@ -175,13 +186,13 @@ impl Journal {
         }
         {
             let mut insert = tx
-                .prepare_cached("INSERT INTO journal(revision, edit) VALUES (?1, ?2)")
+                .prepare_cached("INSERT INTO journal(revision, edit, change) VALUES (?1, ?2, ?3)")
                 .map_err(sql("appending"))?;
-            for &(revision, edit) in entries {
+            for &(revision, edit, change) in entries {
                 let json = serde_json::to_string(edit)
                     .map_err(|source| StoreError::Encode { revision, source })?;
                 insert
-                    .execute((key(revision)?, json))
+                    .execute((key(revision)?, json, change))
                     .map_err(sql("appending"))?;
             }
         }
@@ -243,6 +254,31 @@ impl Journal {
             self.last = None;
         }
         Ok(deleted)
+    }
+
+    /// The stored change descriptions of the entries after `after`, oldest first.
+    pub(crate) fn recent_changes(&self, after: u64) -> Result<Vec<(u64, String)>, StoreError> {
+        let path = &self.path;
+        let sql = |what| move |e| sqlite_error(path, what, e);
+        let mut stmt = self
+            .conn
+            .prepare(
+                "SELECT revision, change FROM journal \
+                 WHERE revision > ?1 AND change IS NOT NULL ORDER BY revision",
+            )
+            .map_err(sql("reading recent changes"))?;
+        let after = key(after.min(i64::MAX as u64))?;
+        let rows = stmt
+            .query_map([after], |r| {
+                Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?))
+            })
+            .map_err(sql("reading recent changes"))?;
+        let mut out = Vec::new();
+        for row in rows {
+            let (stored, change) = row.map_err(sql("reading recent changes"))?;
+            out.push((stored_revision(path, stored)?, change));
+        }
+        Ok(out)
     }
 
     /// Bytes the journal occupies on disk (the database and its write-ahead log).
@@ -350,7 +386,7 @@ fn init_schema(conn: &Connection, path: &Path) -> Result<(), StoreError> {
         if empty {
             conn.execute_batch(
                 "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);
-                 CREATE TABLE journal(revision INTEGER PRIMARY KEY, edit TEXT NOT NULL);",
+                 CREATE TABLE journal(revision INTEGER PRIMARY KEY, edit TEXT NOT NULL, change TEXT);",
             )
             .map_err(sql("creating the tables"))?;
             conn.execute(

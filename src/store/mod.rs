@@ -78,14 +78,21 @@ impl Default for StoreOptions {
 pub struct Store {
     dir: PathBuf,
     journal: Journal,
+    /// `DIR/lock`, held exclusively while the store is open: one process per directory.
+    _lock: std::fs::File,
 }
+
+/// The lock file in a data directory.
+const LOCK_FILE: &str = "lock";
 
 impl Store {
     /// Opens the data directory `dir`, creating it, its journal and its `snapshots/`
-    /// directory as needed, and removes temporary files of snapshot writes that never
-    /// finished.
+    /// directory as needed, takes its lock (one process per directory, released when
+    /// the store is dropped or the process dies), and removes temporary files of
+    /// snapshot writes that never finished.
     ///
-    /// Refused when a directory cannot be created, the journal cannot be opened
+    /// Refused when another process holds the directory ([`StoreError::InUse`]), a
+    /// directory cannot be created, the journal cannot be opened
     /// (permission, not an SQLite database, not a journal) or declares a newer format
     /// ([`StoreError::UnsupportedVersion`]).
     pub fn open(dir: &Path, options: StoreOptions) -> Result<Store, StoreError> {
@@ -94,11 +101,30 @@ impl Store {
         let snaps = snapshot::snapshots_dir(dir);
         std::fs::create_dir_all(&snaps)
             .map_err(|e| StoreError::io("creating snapshot directory", &snaps, e))?;
+        let lock_path = dir.join(LOCK_FILE);
+        let lock = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&lock_path)
+            .map_err(|e| StoreError::io("opening lock file", &lock_path, e))?;
+        match lock.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                return Err(StoreError::InUse {
+                    dir: dir.to_owned(),
+                });
+            }
+            Err(std::fs::TryLockError::Error(e)) => {
+                return Err(StoreError::io("locking", &lock_path, e));
+            }
+        }
         snapshot::remove_stale_temps(dir)?;
         let journal = Journal::open(&dir.join(journal::FILE_NAME), &options)?;
         Ok(Store {
             dir: dir.to_owned(),
             journal,
+            _lock: lock,
         })
     }
 
@@ -128,6 +154,21 @@ impl Store {
     /// the batch is in the journal, and the same batch may be retried.
     pub fn append(&mut self, entries: &[(u64, &Edit)]) -> Result<(), StoreError> {
         self.journal.append(entries)
+    }
+
+    /// [`Store::append`], each entry with a description of what it changed (text, kept
+    /// as given). [`Store::recent_changes`] reads them back after a restart.
+    pub fn append_with_changes(
+        &mut self,
+        entries: &[(u64, &Edit, Option<&str>)],
+    ) -> Result<(), StoreError> {
+        self.journal.append_with_changes(entries)
+    }
+
+    /// The change descriptions stored with the journal entries after `revision`, oldest
+    /// first (entries appended without one are left out).
+    pub fn recent_changes(&self, revision: u64) -> Result<Vec<(u64, String)>, StoreError> {
+        self.journal.recent_changes(revision)
     }
 
     /// Rebuilds the world: loads the newest snapshot that passes its checks (passing

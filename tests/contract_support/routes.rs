@@ -61,7 +61,7 @@ pub fn routes(source: &str) -> Result<Vec<(String, String)>, String> {
 
 /// The method-router functions among `calls`, looking through role markers and
 /// `.merge(..)` (counted in `merges`).
-fn method_names(calls: Vec<(String, String)>, merges: &mut usize) -> Result<Vec<String>, String> {
+fn method_names(calls: Vec<Call>, merges: &mut usize) -> Result<Vec<String>, String> {
     let mut out = Vec::new();
     for (name, arg) in calls {
         match name.as_str() {
@@ -134,11 +134,14 @@ fn string_literal(s: &str) -> Result<(String, &str), String> {
     Ok((lit.to_string(), &body[end + 1..]))
 }
 
+/// A function or method called, and its argument text.
+type Call = (String, String);
+
 /// The functions and methods called at depth 0 of `s`, each with its argument text, up
 /// to the `)` that closes the enclosing call; and the text after that `)`.
-fn top_level_calls(s: &str) -> Result<(Vec<(String, String)>, &str), String> {
+fn top_level_calls(s: &str) -> Result<(Vec<Call>, &str), String> {
     let mut depth = 0usize;
-    let mut calls: Vec<(String, String)> = Vec::new();
+    let mut calls: Vec<Call> = Vec::new();
     let mut open_at = 0usize;
     let mut ident = String::new();
     let mut last_ident = String::new();

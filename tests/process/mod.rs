@@ -57,26 +57,26 @@ impl Server {
                 }
             }
         });
+        // Owned by a guard from here on: a panic below kills and reaps the child.
+        let mut server = Server {
+            child,
+            base: String::new(),
+            log: rx,
+        };
         let mut seen = Vec::new();
         loop {
-            match rx.recv_timeout(Duration::from_secs(60)) {
+            match server.log.recv_timeout(Duration::from_secs(60)) {
                 Ok(line) => {
                     if let Some(addr) = line
                         .split_whitespace()
                         .find_map(|w| w.strip_prefix("bound="))
                     {
-                        return Server {
-                            child,
-                            base: format!("http://{addr}"),
-                            log: rx,
-                        };
+                        server.base = format!("http://{addr}");
+                        return server;
                     }
                     seen.push(line);
                 }
-                Err(_) => {
-                    let _ = child.kill();
-                    panic!("the server did not start listening:\n{}", seen.join("\n"));
-                }
+                Err(_) => panic!("the server did not start listening:\n{}", seen.join("\n")),
             }
         }
     }
