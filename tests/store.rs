@@ -25,7 +25,9 @@ use common::dump;
 /// and every outcome kept to compare with the replay.
 struct Run {
     dir: TempDir,
-    store: Store,
+    /// The open store (closed, releasing its lock, while a test opens the directory
+    /// itself).
+    store: Option<Store>,
     world: World,
     pending: Vec<(u64, Edit)>,
     log: Vec<(u64, Edit, Outcome)>,
@@ -44,13 +46,25 @@ fn options() -> StoreOptions {
 }
 
 impl Run {
+    /// The open store, opened again if closed.
+    fn store(&mut self) -> &mut Store {
+        let dir = self.dir.path();
+        self.store
+            .get_or_insert_with(|| Store::open(dir, options()).unwrap())
+    }
+
+    /// Closes the store, so that the directory can be opened elsewhere.
+    fn close(&mut self) {
+        self.store = None;
+    }
+
     fn new() -> Run {
         let dir = tempfile::tempdir().unwrap();
         let store = Store::open(dir.path(), options()).unwrap();
         assert!(store.is_fresh().unwrap());
         Run {
             dir,
-            store,
+            store: Some(store),
             world: World::new(),
             pending: Vec::new(),
             log: Vec::new(),
@@ -102,12 +116,16 @@ impl Run {
     }
 
     fn flush(&mut self) {
+        let dir = self.dir.path();
+        let store = self
+            .store
+            .get_or_insert_with(|| Store::open(dir, options()).unwrap());
         let batch: Vec<(u64, &Edit)> = self.pending.iter().map(|(r, e)| (*r, e)).collect();
-        self.store.append(&batch).unwrap();
+        store.append(&batch).unwrap();
         self.pending.clear();
         self.batches += 1;
         if self.world.revision() > 0 {
-            assert_eq!(self.store.last_revision(), Some(self.world.revision()));
+            assert_eq!(self.store().last_revision(), Some(self.world.revision()));
         }
     }
 
@@ -115,6 +133,7 @@ impl Run {
     /// the one the edit had when first applied.
     fn recover(&mut self) -> (Store, winged::store::Recovered) {
         self.flush();
+        self.close();
         let mut store = Store::open(self.dir.path(), options()).unwrap();
         let log = &self.log;
         let rec = store
@@ -675,7 +694,7 @@ fn only_the_newest_two_snapshots_are_kept() {
         random_writes(&mut run, &bodies, 5, 10 + k as u64);
     }
     let kept: Vec<u64> = run
-        .store
+        .store()
         .snapshots()
         .unwrap()
         .iter()
@@ -725,14 +744,15 @@ fn a_damaged_snapshot_whose_journal_was_pruned_is_a_clear_error() {
     run.flush();
     // Pruning through the newest snapshot (instead of `oldest_kept`) leaves nothing to
     // bridge from the older one.
-    let deleted = run.store.prune_through(newer.revision).unwrap();
+    let deleted = run.store().prune_through(newer.revision).unwrap();
     assert_eq!(deleted, newer.revision);
-    assert_eq!(run.store.first_revision(), Some(newer.revision + 1));
+    assert_eq!(run.store().first_revision(), Some(newer.revision + 1));
     let (_, rec) = run.recover();
     assert_eq!(rec.snapshot, Some(newer.revision));
     assert_same_world(&run.world, &rec.world);
 
     flip_a_byte(&newer.path);
+    run.close();
     let mut store = Store::open(run.dir.path(), options()).unwrap();
     match store.recover(|_, _, _, _| {}) {
         Err(StoreError::Gap {
@@ -763,9 +783,10 @@ fn a_damaged_snapshot_newer_than_everything_else_is_not_silently_lost() {
     random_writes(&mut run, &bodies, 30, 13);
     run.flush();
     let newer = write_snapshot(run.dir.path(), &run.world).unwrap();
-    run.store.prune_through(newer.revision).unwrap();
-    assert_eq!(run.store.journal_len(), 0);
+    run.store().prune_through(newer.revision).unwrap();
+    assert_eq!(run.store().journal_len(), 0);
     truncate(&newer.path);
+    run.close();
     let mut store = Store::open(run.dir.path(), options()).unwrap();
     match store.recover(|_, _, _, _| {}) {
         Err(StoreError::Unrecoverable {
@@ -846,10 +867,11 @@ fn snapshot_header_checks() {
 
 #[test]
 fn a_hole_in_the_journal_is_refused() {
-    let (run, _) = plain_run(30, 16);
-    let conn = rusqlite::Connection::open(run.store.journal_path()).unwrap();
+    let (mut run, _) = plain_run(30, 16);
+    let conn = rusqlite::Connection::open(run.store().journal_path()).unwrap();
     conn.execute("DELETE FROM journal WHERE revision = 17", [])
         .unwrap();
+    run.close();
     let mut store = Store::open(run.dir.path(), options()).unwrap();
     let err = store.recover(|_, _, _, _| {}).unwrap_err();
     assert!(
@@ -867,6 +889,7 @@ fn a_hole_in_the_journal_is_refused() {
     // A journal that starts after revision 1 with no snapshot before it.
     conn.execute("DELETE FROM journal WHERE revision < 17", [])
         .unwrap();
+    drop(store);
     let mut store = Store::open(run.dir.path(), options()).unwrap();
     let err = store.recover(|_, _, _, _| {}).unwrap_err();
     assert!(
@@ -885,13 +908,14 @@ fn a_hole_in_the_journal_is_refused() {
 
 #[test]
 fn an_unreadable_or_refused_entry_stops_recovery_with_its_revision() {
-    let (run, _) = plain_run(10, 17);
-    let conn = rusqlite::Connection::open(run.store.journal_path()).unwrap();
+    let (mut run, _) = plain_run(10, 17);
+    let conn = rusqlite::Connection::open(run.store().journal_path()).unwrap();
     conn.execute(
         "UPDATE journal SET edit = '{\"edit\": \"nonsense\"}' WHERE revision = 9",
         [],
     )
     .unwrap();
+    run.close();
     let mut store = Store::open(run.dir.path(), options()).unwrap();
     let err = store.recover(|_, _, _, _| {}).unwrap_err();
     assert!(
@@ -915,7 +939,7 @@ fn a_failed_append_leaves_none_of_its_batch() {
     let (mut run, bodies) = plain_run(10, 18);
     let last = run.world.revision();
     // Make SQLite fail on the third entry of the next batch.
-    let conn = rusqlite::Connection::open(run.store.journal_path()).unwrap();
+    let conn = rusqlite::Connection::open(run.store().journal_path()).unwrap();
     conn.execute_batch(&format!(
         "CREATE TRIGGER fail BEFORE INSERT ON journal WHEN NEW.revision = {}
          BEGIN SELECT RAISE(ABORT, 'refused by test'); END;",
@@ -934,7 +958,7 @@ fn a_failed_append_leaves_none_of_its_batch() {
         batch.push((world.revision(), edit));
     }
     let entries: Vec<(u64, &Edit)> = batch.iter().map(|(r, e)| (*r, e)).collect();
-    let err = run.store.append(&entries).unwrap_err();
+    let err = run.store().append(&entries).unwrap_err();
     assert!(matches!(err, StoreError::Sqlite { .. }), "{err:?}");
     assert!(err.to_string().contains("refused by test"), "{err}");
     let count: i64 = conn
@@ -945,12 +969,13 @@ fn a_failed_append_leaves_none_of_its_batch() {
         )
         .unwrap();
     assert_eq!(count, 0, "none of the batch is in the journal");
-    assert_eq!(run.store.last_revision(), Some(last));
+    assert_eq!(run.store().last_revision(), Some(last));
     // Once the cause is gone the same batch goes in.
     conn.execute_batch("DROP TRIGGER fail").unwrap();
-    run.store.append(&entries).unwrap();
-    assert_eq!(run.store.last_revision(), Some(last + 5));
-    drop(run.store);
+    run.store().append(&entries).unwrap();
+    assert_eq!(run.store().last_revision(), Some(last + 5));
+    run.close();
+    run.close();
     let mut store = Store::open(run.dir.path(), options()).unwrap();
     let rec = store.recover(|_, _, _, _| {}).unwrap();
     assert_same_world(&world, &rec.world);
@@ -974,7 +999,7 @@ fn appends_must_continue_the_journal() {
             last + 3,
         ),
     ] {
-        match run.store.append(&entries) {
+        match run.store().append(&entries) {
             Err(StoreError::OutOfOrder {
                 expected: e,
                 found: f,
@@ -984,7 +1009,7 @@ fn appends_must_continue_the_journal() {
             other => panic!("expected out of order, got {other:?}"),
         }
     }
-    assert_eq!(run.store.last_revision(), Some(last));
+    assert_eq!(run.store().last_revision(), Some(last));
 }
 
 #[test]
@@ -1077,11 +1102,11 @@ fn pruning_keeps_recovery_exact_and_shrinks_the_journal() {
     let second = write_snapshot(run.dir.path(), &run.world).unwrap();
     random_writes(&mut run, &bodies, 100, 23);
     run.flush();
-    let before = run.store.journal_len();
-    let deleted = run.store.prune_through(second.oldest_kept).unwrap();
+    let before = run.store().journal_len();
+    let deleted = run.store().prune_through(second.oldest_kept).unwrap();
     assert_eq!(deleted, first.revision);
-    assert_eq!(run.store.journal_len(), before - deleted);
-    assert_eq!(run.store.first_revision(), Some(first.revision + 1));
+    assert_eq!(run.store().journal_len(), before - deleted);
+    assert_eq!(run.store().first_revision(), Some(first.revision + 1));
     // Even with the newest snapshot damaged, the older one and the journal suffice.
     flip_a_byte(&second.path);
     let (_, rec) = run.recover();
@@ -1091,7 +1116,7 @@ fn pruning_keeps_recovery_exact_and_shrinks_the_journal() {
 
 #[test]
 fn a_journal_that_ends_before_the_snapshot_is_dropped_and_appends_continue() {
-    let (run, bodies) = plain_run(30, 24);
+    let (mut run, bodies) = plain_run(30, 24);
     // The snapshot is ahead of the journal: its last writes were never journaled.
     let mut ahead = run.world.clone();
     let edit: Edit = serde_json::from_value(patch(
@@ -1103,7 +1128,7 @@ fn a_journal_that_ends_before_the_snapshot_is_dropped_and_appends_continue() {
         apply(&mut ahead, &edit).unwrap();
     }
     write_snapshot(run.dir.path(), &ahead).unwrap();
-    drop(run.store);
+    run.close();
     let mut store = Store::open(run.dir.path(), options()).unwrap();
     let rec = store.recover(|_, _, _, _| {}).unwrap();
     assert_same_world(&ahead, &rec.world);
@@ -1111,6 +1136,7 @@ fn a_journal_that_ends_before_the_snapshot_is_dropped_and_appends_continue() {
     let mut world = rec.world;
     apply(&mut world, &edit).unwrap();
     store.append(&[(world.revision(), &edit)]).unwrap();
+    drop(store);
     let mut store = Store::open(run.dir.path(), options()).unwrap();
     let rec = store.recover(|_, _, _, _| {}).unwrap();
     assert_same_world(&world, &rec.world);
@@ -1143,7 +1169,7 @@ fn a_store_can_move_to_the_thread_that_owns_the_world() {
 fn the_journal_is_not_pruned_past_the_newest_snapshot() {
     let (mut run, bodies) = plain_run(20, 25);
     let last = run.world.revision();
-    let err = run.store.prune_through(5).unwrap_err();
+    let err = run.store().prune_through(5).unwrap_err();
     assert!(
         matches!(
             err,
@@ -1157,15 +1183,15 @@ fn the_journal_is_not_pruned_past_the_newest_snapshot() {
     let snap = write_snapshot(run.dir.path(), &run.world).unwrap();
     random_writes(&mut run, &bodies, 5, 26);
     run.flush();
-    let err = run.store.prune_through(snap.revision + 1).unwrap_err();
+    let err = run.store().prune_through(snap.revision + 1).unwrap_err();
     assert!(
         err.to_string()
             .contains(&format!("newest snapshot is at {last}")),
         "{err}"
     );
-    assert_eq!(run.store.first_revision(), Some(1));
+    assert_eq!(run.store().first_revision(), Some(1));
     assert_eq!(
-        run.store.prune_through(snap.revision).unwrap(),
+        run.store().prune_through(snap.revision).unwrap(),
         snap.revision
     );
 }
