@@ -574,3 +574,23 @@ fn bad_input_gets_a_problem_and_changes_nothing() {
     // And the server still works.
     s.post(&euler, &json!({"op": "esplit", "edge": e})).ok();
 }
+
+#[test]
+fn a_body_a_route_ignores_does_not_cost_the_connection() {
+    // EVERT, DUAL and DELETE take no body; one sent anyway is read and dropped, so the
+    // kept-alive connection carries the next request.
+    let s = TestServer::start();
+    let b = s
+        .post(
+            "/v1/bodies",
+            &json!({"shape": {"type": "box", "size": [1, 1, 1]}}),
+        )
+        .ok()["id"]
+        .as_u64()
+        .expect("an id");
+    for _ in 0..300 {
+        s.post(&format!("/v1/bodies/{b}/evert"), &json!({"ignored": true}))
+            .ok();
+        s.get("/v1/world").ok();
+    }
+}

@@ -8,7 +8,7 @@ use axum::response::IntoResponse;
 use serde::Deserialize;
 use serde_json::json;
 
-use super::precondition::{IfMatch, WriteJson};
+use super::precondition::{IfMatch, Unused, WriteJson};
 use super::{Answer, HeavyReads, read_answer, snapshot, write};
 use crate::model::{BodyId, Serial, World};
 use crate::server::actor::Handle;
@@ -245,6 +245,7 @@ pub(super) async fn delete_body(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
     id: Result<Path<u64>, PathRejection>,
+    _unused: Unused,
 ) -> Answer {
     write(
         &h,
@@ -286,6 +287,7 @@ pub(super) async fn dual(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
     id: Result<Path<u64>, PathRejection>,
+    _unused: Unused,
 ) -> Answer {
     write(
         &h,
@@ -300,6 +302,7 @@ pub(super) async fn evert(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
     id: Result<Path<u64>, PathRejection>,
+    _unused: Unused,
 ) -> Answer {
     write(
         &h,
@@ -362,6 +365,7 @@ pub(super) async fn delete_camera(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
     name: Result<Path<String>, PathRejection>,
+    _unused: Unused,
 ) -> Answer {
     let name = name_of(name)?;
     write(&h, Edit::DeleteCamera { name }, expected, StatusCode::OK).await
@@ -416,6 +420,7 @@ pub(super) async fn delete_light(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
     name: Result<Path<String>, PathRejection>,
+    _unused: Unused,
 ) -> Answer {
     let name = name_of(name)?;
     write(&h, Edit::DeleteLight { name }, expected, StatusCode::OK).await

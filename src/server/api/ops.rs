@@ -7,6 +7,7 @@ use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
+use super::precondition::Unused;
 use super::{Answer, AppState, snapshot};
 use crate::server::actor::CheckpointError;
 use crate::server::metrics;
@@ -62,7 +63,7 @@ pub(super) async fn metrics(State(s): State<AppState>) -> Answer {
 
 /// `POST /v1/admin/snapshot`: writes a snapshot file of the world now (copy it for a
 /// backup) and answers its revision, path and size.
-pub(super) async fn snapshot_now(State(s): State<AppState>) -> Answer {
+pub(super) async fn snapshot_now(State(s): State<AppState>, _unused: Unused) -> Answer {
     match s.handle.checkpoint().await {
         Ok(c) => Ok(Json(c).into_response()),
         Err(e @ CheckpointError::InMemory) => Err(Problem::new(

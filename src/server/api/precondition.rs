@@ -90,18 +90,9 @@ where
                 "send the body as JSON with Content-Type: application/json",
             ));
         }
-        let bytes = Bytes::from_request(req, state).await.map_err(|r| {
-            if r.status() == StatusCode::PAYLOAD_TOO_LARGE {
-                Problem::new(
-                    StatusCode::PAYLOAD_TOO_LARGE,
-                    "too-large",
-                    "Request body too large",
-                    r.body_text(),
-                )
-            } else {
-                Problem::bad_request(r.body_text())
-            }
-        })?;
+        let bytes = Bytes::from_request(req, state)
+            .await
+            .map_err(body_problem)?;
         // Most writes carry no precondition field: read them straight into `T`.
         let mentions_field = memchr::memmem::find(&bytes, FIELD.as_bytes()).is_some();
         let (value, field) = if mentions_field {
@@ -150,4 +141,34 @@ fn is_json(headers: &HeaderMap) -> bool {
                 || (essence.starts_with("application/") && essence.ends_with("+json"))
         })
         .unwrap_or(false)
+}
+
+/// A request body a route does not use, read and dropped so the connection can carry
+/// the next request (an unread body would make the server close it).
+#[derive(Debug)]
+pub struct Unused;
+
+impl<S: Send + Sync> FromRequest<S> for Unused {
+    type Rejection = Problem;
+
+    async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
+        Bytes::from_request(req, state)
+            .await
+            .map(|_| Unused)
+            .map_err(body_problem)
+    }
+}
+
+/// A body that could not be read: 413 when over the limit, else 400.
+fn body_problem(r: axum::extract::rejection::BytesRejection) -> Problem {
+    if r.status() == StatusCode::PAYLOAD_TOO_LARGE {
+        Problem::new(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            "too-large",
+            "Request body too large",
+            r.body_text(),
+        )
+    } else {
+        Problem::bad_request(r.body_text())
+    }
 }
