@@ -17,6 +17,9 @@ use super::changes::Change;
 use crate::model::World;
 use crate::store::{SnapshotWritten, Store, StoreError, StoreOptions};
 
+/// Journal entries deleted after one commit, at most: a short transaction.
+const PRUNE_STEP: u64 = 2_000;
+
 /// When snapshots are taken and how much journal is kept behind them.
 #[derive(Debug, Clone, Copy)]
 pub struct SnapshotPolicy {
@@ -44,6 +47,9 @@ pub struct Durable {
     last_snapshot: u64,
     /// A background snapshot's result, while one is being written.
     writing: Option<Receiver<Result<SnapshotWritten, StoreError>>>,
+    /// Journal entries up to this revision are no longer needed; they are deleted a
+    /// few at a time after each commit, so no write waits for a long delete.
+    prune_to: u64,
     observer: Arc<dyn Observer>,
 }
 
@@ -86,6 +92,7 @@ pub fn open(
             policy,
             last_snapshot,
             writing: None,
+            prune_to: 0,
             observer,
         },
         world: recovered.world,
@@ -143,12 +150,27 @@ impl Durable {
             seconds = w.duration.as_secs_f64(),
             "snapshot written"
         );
-        let through = w.oldest_kept.saturating_sub(self.policy.keep);
-        if through > 0 {
-            match self.store.prune_through(through) {
-                Ok(n) if n > 0 => tracing::info!(through, entries = n, "journal pruned"),
-                Ok(_) => {}
-                Err(e) => tracing::warn!(error = %e, "journal pruning failed; will retry"),
+        self.prune_to = self
+            .prune_to
+            .max(w.oldest_kept.saturating_sub(self.policy.keep));
+    }
+
+    /// Deletes up to [`PRUNE_STEP`] journal entries no longer needed.
+    fn prune_step(&mut self) {
+        let Some(first) = self.store.first_revision() else {
+            return;
+        };
+        if first > self.prune_to {
+            return;
+        }
+        let through = self.prune_to.min(first.saturating_add(PRUNE_STEP - 1));
+        match self.store.prune_through(through) {
+            Ok(_) if through == self.prune_to => {
+                tracing::info!(through, "journal pruned behind the snapshots")
+            }
+            Ok(_) => {}
+            Err(e) => {
+                tracing::warn!(error = %e, "journal pruning failed; will retry");
             }
         }
     }
@@ -172,6 +194,7 @@ impl Journal for Durable {
 
     fn committed(&mut self, world: &World) {
         self.collect();
+        self.prune_step();
         let due = world.revision() >= self.last_snapshot.saturating_add(self.policy.every);
         if !due || self.writing.is_some() {
             return;
