@@ -54,14 +54,7 @@ struct RequestLabels {
     status: u16,
 }
 
-/// Labels of the request duration histogram.
-#[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
-struct RouteLabels {
-    route: String,
-    method: &'static str,
-}
-
-type HistogramFamily = Family<RouteLabels, Histogram, fn() -> Histogram>;
+type HistogramFamily = Family<RequestLabels, Histogram, fn() -> Histogram>;
 
 fn request_duration_histogram() -> Histogram {
     // 100 µs .. 30 s, 20 buckets (a factor of about 1.94 apart).
@@ -119,7 +112,7 @@ impl Metrics {
             Family::new_with_constructor(request_duration_histogram);
         registry.register_with_unit(
             "winged_http_request_duration",
-            "Time from receiving an HTTP request to sending its response head",
+            "Time from receiving an HTTP request to sending its response head, by route template, method and status",
             Unit::Seconds,
             request_duration.clone(),
         );
@@ -253,9 +246,10 @@ impl Metrics {
             })
             .inc();
         self.request_duration
-            .get_or_create(&RouteLabels {
+            .get_or_create(&RequestLabels {
                 route: route.to_owned(),
                 method,
+                status,
             })
             .observe(elapsed.as_secs_f64());
     }
@@ -497,7 +491,7 @@ mod tests {
         assert_eq!(
             sample(
                 &text,
-                r#"winged_http_request_duration_seconds_count{route="/v1/bodies/{id}",method="GET"} "#
+                r#"winged_http_request_duration_seconds_count{route="/v1/bodies/{id}",method="GET",status="200"} "#
             ),
             Some(3.0)
         );
