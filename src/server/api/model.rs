@@ -9,7 +9,7 @@ use serde::Deserialize;
 use serde_json::json;
 
 use super::precondition::{IfMatch, Unused, WriteJson};
-use super::{Answer, HeavyReads, read_answer, snapshot, write};
+use super::{Answer, HeavyReads, read_answer, snapshot, world_size, write};
 use crate::model::{BodyId, Serial, World};
 use crate::server::actor::Handle;
 use crate::server::dto::{
@@ -29,12 +29,7 @@ fn name_of(p: Result<Path<String>, PathRejection>) -> Result<String, Problem> {
 
 pub(super) async fn world(State(h): State<Handle>) -> Answer {
     let w = snapshot(&h).await?;
-    let (mut f, mut e, mut v) = (0, 0, 0);
-    for (_, node) in w.bodies() {
-        f += node.body.face_count();
-        e += node.body.edge_count();
-        v += node.body.vertex_count();
-    }
+    let (f, e, v) = world_size(&w);
     Ok(read_answer(
         w.revision(),
         json!({

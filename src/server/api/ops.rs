@@ -8,7 +8,7 @@ use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
 use super::precondition::Unused;
-use super::{Answer, AppState, snapshot};
+use super::{Answer, AppState, snapshot, world_size};
 use crate::server::actor::CheckpointError;
 use crate::server::metrics;
 use crate::server::problem::Problem;
@@ -45,12 +45,7 @@ pub(super) async fn readyz(State(s): State<AppState>) -> Answer {
 /// `GET /metrics`: Prometheus (OpenMetrics) text, with the world's size measured now.
 pub(super) async fn metrics(State(s): State<AppState>) -> Answer {
     let w = snapshot(&s.handle).await?;
-    let (mut f, mut e, mut v) = (0, 0, 0);
-    for (_, node) in w.bodies() {
-        f += node.body.face_count();
-        e += node.body.edge_count();
-        v += node.body.vertex_count();
-    }
+    let (f, e, v) = world_size(&w);
     s.metrics.set_world(w.revision(), w.body_count(), f, e, v);
     s.metrics
         .set_queue_depth(i64::try_from(s.handle.queue_depth()).unwrap_or(i64::MAX));
