@@ -44,7 +44,7 @@ use axum::response::{IntoResponse, Response};
 use sha2::{Digest, Sha256};
 use subtle::{ConditionallySelectable, ConstantTimeEq};
 
-use super::problem::Problem;
+use super::problem::{Problem, refused_unread};
 
 /// What a caller may do. Ordered: `Read < Write < Admin`, and a higher role includes every
 /// lower one.
@@ -455,7 +455,7 @@ async fn admit(tokens: &Tokens, need: Role, mut req: Request, next: Next) -> Res
                 header::WWW_AUTHENTICATE,
                 HeaderValue::from_static(r#"Bearer realm="winged", error="insufficient_scope""#),
             );
-            return res;
+            return refused_unread(res);
         }
         role
     };
@@ -491,7 +491,7 @@ fn unauthorized(detail: &'static str, challenge: &'static str) -> Response {
         header::WWW_AUTHENTICATE,
         HeaderValue::from_static(challenge),
     );
-    res
+    refused_unread(res)
 }
 
 #[cfg(test)]

@@ -191,14 +191,16 @@ async fn time_limit(State(limit): State<Duration>, req: Request, next: Next) -> 
             } else {
                 format!("no answer within {} s", limit.as_secs_f64())
             };
-            Problem::new(
-                axum::http::StatusCode::SERVICE_UNAVAILABLE,
-                "timeout",
-                "Request timed out",
-                detail,
+            problem::refused_unread(
+                Problem::new(
+                    axum::http::StatusCode::SERVICE_UNAVAILABLE,
+                    "timeout",
+                    "Request timed out",
+                    detail,
+                )
+                .retry_after(1)
+                .into_response(),
             )
-            .retry_after(1)
-            .into_response()
         }
     }
 }

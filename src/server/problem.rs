@@ -235,3 +235,12 @@ impl From<WriteError> for Problem {
         }
     }
 }
+
+/// `res`, an answer given before the request's body was read, marked
+/// `Connection: close`: the server will not read the rest of that body, so the
+/// connection cannot carry another request and the client must not reuse it.
+pub fn refused_unread(mut res: Response) -> Response {
+    res.headers_mut()
+        .insert(header::CONNECTION, HeaderValue::from_static("close"));
+    res
+}
