@@ -13,9 +13,10 @@ use std::time::{Duration, Instant};
 
 use serde_json::json;
 use winged::model::World;
+use winged::server::background::Background;
 use winged::server::durable::{self, SnapshotPolicy};
 use winged::server::metrics::Metrics;
-use winged::server::{Options, build, serve};
+use winged::server::{Options, build};
 use winged::store::{Durability, StoreOptions};
 
 fn main() {
@@ -28,18 +29,10 @@ fn main() {
     };
     let dir = tempfile::tempdir().expect("a temporary directory");
     let data = dir.path().join("world");
-    let (addr_tx, addr_rx) = std::sync::mpsc::channel();
-    let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let metrics = Arc::new(Metrics::new());
     let server = {
-        let data = data.clone();
-        let metrics = metrics.clone();
-        std::thread::spawn(move || {
-            let rt = tokio::runtime::Runtime::new().expect("a runtime");
-            let options = Options {
-                metrics: metrics.clone(),
-                ..Options::default()
-            };
+        let (data, metrics) = (data.clone(), metrics.clone());
+        Background::start("127.0.0.1:0".parse().unwrap(), move || {
             let opened = durable::open(
                 &data,
                 StoreOptions {
@@ -48,28 +41,19 @@ fn main() {
                 },
                 SnapshotPolicy::default(),
                 1000,
-                metrics,
+                metrics.clone(),
                 || Some(World::new()),
             )
-            .expect("the data directory opens");
-            let app = rt
-                .block_on(async { build(opened.world, opened.journal, opened.recent, options) })
-                .expect("the server builds");
-            rt.block_on(serve(
-                "127.0.0.1:0".parse().unwrap(),
-                app,
-                move |a| {
-                    let _ = addr_tx.send(a);
-                },
-                async move {
-                    let _ = stop_rx.await;
-                },
-            ))
-            .expect("the server runs");
+            .map_err(std::io::Error::other)?;
+            let options = Options {
+                metrics,
+                ..Options::default()
+            };
+            build(opened.world, opened.journal, opened.recent, options)
         })
+        .expect("the server starts")
     };
-    let addr = addr_rx.recv().expect("the server binds");
-    let base = format!("http://{addr}");
+    let base = server.base();
     println!(
         "durable writes over HTTP, {:?} durability, {seconds} s per level, data in {}",
         durability,
@@ -144,8 +128,7 @@ fn main() {
             (seconds1 - seconds0) * 1e3 / commits.max(1.0),
         );
     }
-    let _ = stop_tx.send(());
-    server.join().expect("the server stops");
+    server.stop().expect("the server stops");
 }
 
 /// (commits, entries, seconds) so far, read from the metrics' text.

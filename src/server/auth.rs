@@ -653,24 +653,10 @@ mod tests {
 
         /// Serves `app` on 127.0.0.1:0 and sends each `(method, path, authorization)`.
         fn exchange(app: Router, requests: &[(&str, &str, Option<&str>)]) -> Vec<Answer> {
-            let rt = tokio::runtime::Builder::new_current_thread()
-                .enable_all()
-                .build()
-                .unwrap();
-            let listener = rt
-                .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
-                .unwrap();
-            let base = format!("http://{}", listener.local_addr().unwrap());
-            let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-            let server = std::thread::spawn(move || {
-                rt.block_on(async move {
-                    axum::serve(listener, app)
-                        .with_graceful_shutdown(async move {
-                            let _ = stopped.await;
-                        })
-                        .await
-                })
-            });
+            let server =
+                crate::server::background::Background::router("127.0.0.1:0".parse().unwrap(), app)
+                    .unwrap();
+            let base = server.base();
             let agent: ureq::Agent = ureq::Agent::config_builder()
                 .http_status_as_error(false)
                 .build()
@@ -701,8 +687,7 @@ mod tests {
                 })
                 .collect();
             drop(agent);
-            let _ = stop.send(());
-            server.join().unwrap().unwrap();
+            server.stop().unwrap();
             answers
         }
 

@@ -433,24 +433,10 @@ mod tests {
             .merge(routes(m.clone()))
             .layer(from_fn_with_state(m.clone(), track));
 
-        let rt = tokio::runtime::Builder::new_current_thread()
-            .enable_all()
-            .build()
-            .unwrap();
-        let listener = rt
-            .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
-            .unwrap();
-        let base = format!("http://{}", listener.local_addr().unwrap());
-        let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-        let server = std::thread::spawn(move || {
-            rt.block_on(async move {
-                axum::serve(listener, app)
-                    .with_graceful_shutdown(async move {
-                        let _ = stopped.await;
-                    })
-                    .await
-            })
-        });
+        let server =
+            crate::server::background::Background::router("127.0.0.1:0".parse().unwrap(), app)
+                .unwrap();
+        let base = server.base();
         let agent: ureq::Agent = ureq::Agent::config_builder()
             .http_status_as_error(false)
             .build()
@@ -466,8 +452,7 @@ mod tests {
         let content_type = res.headers().get("content-type").cloned();
         let text = res.body_mut().read_to_string().unwrap();
         drop(agent);
-        let _ = stop.send(());
-        server.join().unwrap().unwrap();
+        server.stop().unwrap();
 
         assert_eq!(
             content_type.as_ref().and_then(|v| v.to_str().ok()),

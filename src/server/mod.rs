@@ -13,6 +13,7 @@
 pub mod actor;
 pub mod api;
 pub mod auth;
+pub mod background;
 pub mod changes;
 pub mod demo;
 pub mod dto;
@@ -206,8 +207,8 @@ async fn time_limit(State(limit): State<Duration>, req: Request, next: Next) -> 
 }
 
 /// Binds `addr` and serves `app` until `shutdown` resolves; event streams end,
-/// in-flight requests finish, and the world's owner closes its journal first. Returns the bound address through `bound` as soon as
-/// it is listening.
+/// in-flight requests finish, and the world's owner closes its journal first.
+/// Returns the bound address through `bound` as soon as it is listening.
 pub async fn serve(
     addr: SocketAddr,
     app: App,
@@ -216,6 +217,15 @@ pub async fn serve(
 ) -> std::io::Result<()> {
     let listener = TcpListener::bind(addr).await?;
     bound(listener.local_addr()?);
+    serve_on(listener, app, shutdown).await
+}
+
+/// Serves `app` on a bound `listener` until `shutdown` resolves, as [`serve`] does.
+pub async fn serve_on(
+    listener: TcpListener,
+    app: App,
+    shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+) -> std::io::Result<()> {
     let App {
         router,
         feed,

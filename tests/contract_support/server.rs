@@ -1,20 +1,16 @@
 //! A real server on an ephemeral port, and a plain HTTP client for it.
 
-use std::net::SocketAddr;
-use std::sync::mpsc;
-use std::thread::JoinHandle;
 use std::time::Duration;
 
 use winged::model::World;
+use winged::server::background::Background;
 
-/// `winged::server::serve` on `127.0.0.1:0` over a fresh data directory, in a thread with
-/// its own runtime; shut down (gracefully) when dropped.
+/// A server on `127.0.0.1:0` over a fresh data directory, in a thread with its own
+/// runtime; shut down (gracefully) when dropped.
 pub struct TestServer {
     /// `http://127.0.0.1:PORT`.
     pub base: String,
-    stop: Option<tokio::sync::oneshot::Sender<()>>,
-    done: mpsc::Receiver<()>,
-    thread: Option<JoinHandle<()>>,
+    _server: Background,
     /// The server's data directory (a real journal and snapshots).
     _data: tempfile::TempDir,
 }
@@ -24,15 +20,7 @@ impl TestServer {
     pub fn start(world: World) -> TestServer {
         let dir = tempfile::tempdir().expect("a temporary directory");
         let data = dir.path().join("world");
-        let (bound_tx, bound_rx) = mpsc::channel::<SocketAddr>();
-        let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
-        let (done_tx, done_rx) = mpsc::channel::<()>();
-        let thread = std::thread::spawn(move || {
-            let rt = tokio::runtime::Builder::new_multi_thread()
-                .worker_threads(2)
-                .enable_all()
-                .build()
-                .expect("a tokio runtime");
+        let server = Background::start("127.0.0.1:0".parse().expect("an address"), move || {
             let opened = winged::server::durable::open(
                 &data,
                 winged::store::StoreOptions::default(),
@@ -41,56 +29,19 @@ impl TestServer {
                 std::sync::Arc::new(winged::server::metrics::Metrics::new()),
                 || Some(world),
             )
-            .expect("the data directory opens");
-            let app = rt
-                .block_on(async {
-                    winged::server::build(
-                        opened.world,
-                        opened.journal,
-                        opened.recent,
-                        winged::server::Options::default(),
-                    )
-                })
-                .expect("the world's owner starts");
-            let served = rt.block_on(winged::server::serve(
-                "127.0.0.1:0".parse().expect("an address"),
-                app,
-                move |addr| {
-                    let _ = bound_tx.send(addr);
-                },
-                async move {
-                    let _ = stop_rx.await;
-                },
-            ));
-            served.expect("the server runs until told to stop");
-            let _ = done_tx.send(());
-        });
-        let addr = bound_rx
-            .recv_timeout(Duration::from_secs(20))
-            .expect("the server binds within 20 s");
+            .map_err(std::io::Error::other)?;
+            winged::server::build(
+                opened.world,
+                opened.journal,
+                opened.recent,
+                winged::server::Options::default(),
+            )
+        })
+        .expect("the server starts");
         TestServer {
-            base: format!("http://{addr}"),
-            stop: Some(stop_tx),
-            done: done_rx,
-            thread: Some(thread),
+            base: server.base(),
+            _server: server,
             _data: dir,
-        }
-    }
-}
-
-impl Drop for TestServer {
-    fn drop(&mut self) {
-        if let Some(stop) = self.stop.take() {
-            let _ = stop.send(());
-        }
-        let finished = self.done.recv_timeout(Duration::from_secs(20)).is_ok();
-        if let Some(t) = self.thread.take()
-            && (finished || t.is_finished())
-        {
-            // A panic in the server thread surfaces here, unless already panicking.
-            if t.join().is_err() && !std::thread::panicking() {
-                panic!("the server thread panicked");
-            }
         }
     }
 }

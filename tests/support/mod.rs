@@ -3,18 +3,14 @@
 
 #![allow(dead_code)]
 
-use std::net::SocketAddr;
-use std::sync::mpsc;
-use std::thread::JoinHandle;
-
 use serde_json::Value;
 use winged::model::World;
+use winged::server::background::Background;
 
 /// A running server; stopped (gracefully) when dropped.
 pub struct TestServer {
     pub base: String,
-    stop: Option<tokio::sync::oneshot::Sender<()>>,
-    thread: Option<JoinHandle<()>>,
+    _server: Background,
     agent: ureq::Agent,
 }
 
@@ -38,39 +34,15 @@ impl TestServer {
 
     /// Serves the application `make` builds (called on the server's runtime).
     pub fn with_app(make: impl FnOnce() -> winged::server::App + Send + 'static) -> Self {
-        let (addr_tx, addr_rx) = mpsc::channel::<SocketAddr>();
-        let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
-        let thread = std::thread::spawn(move || {
-            let rt = tokio::runtime::Builder::new_multi_thread()
-                .worker_threads(2)
-                .enable_all()
-                .build()
-                .expect("a tokio runtime");
-            rt.block_on(async move {
-                let app = make();
-                winged::server::serve(
-                    "127.0.0.1:0".parse().unwrap(),
-                    app,
-                    move |a| {
-                        let _ = addr_tx.send(a);
-                    },
-                    async move {
-                        let _ = stop_rx.await;
-                    },
-                )
-                .await
-                .expect("the server runs");
-            });
-        });
-        let addr = addr_rx.recv().expect("the server binds");
+        let server = Background::start("127.0.0.1:0".parse().unwrap(), move || Ok(make()))
+            .expect("the server starts");
         let agent: ureq::Agent = ureq::Agent::config_builder()
             .http_status_as_error(false)
             .build()
             .into();
         TestServer {
-            base: format!("http://{addr}"),
-            stop: Some(stop_tx),
-            thread: Some(thread),
+            base: server.base(),
+            _server: server,
             agent,
         }
     }
@@ -116,17 +88,6 @@ impl TestServer {
 
     pub fn agent(&self) -> ureq::Agent {
         self.agent.clone()
-    }
-}
-
-impl Drop for TestServer {
-    fn drop(&mut self) {
-        if let Some(stop) = self.stop.take() {
-            let _ = stop.send(());
-        }
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
     }
 }
 
