@@ -81,6 +81,31 @@ pub struct BodyNode {
     /// The polyhedron, behind an `Arc` so that cloning the world (a snapshot) shares
     /// every body, and a later write copies only the body it changes.
     pub body: Arc<Body>,
+    /// The material colour appearance renders the body's faces with; `None` for the
+    /// default (a colour chosen from the body's id).
+    pub color: Option<Color>,
+}
+
+/// A material colour: 8-bit sRGB red, green and blue.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Serialize, Deserialize)]
+pub struct Color(pub [u8; 3]);
+
+impl Color {
+    /// The `#rrggbb` form.
+    pub fn to_hex(self) -> String {
+        let [r, g, b] = self.0;
+        format!("#{r:02x}{g:02x}{b:02x}")
+    }
+
+    /// Parses `#rrggbb` (the `#` is required, hex digits in either case).
+    pub fn from_hex(s: &str) -> Option<Color> {
+        let hex = s.strip_prefix('#')?;
+        if hex.len() != 6 || !hex.is_ascii() {
+            return None;
+        }
+        let channel = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).ok();
+        Some(Color([channel(0)?, channel(2)?, channel(4)?]))
+    }
 }
 
 /// The longest name a body, camera or light may have, in bytes.
@@ -128,6 +153,7 @@ impl PartsTree {
                 parts: Vec::new(),
                 pose: Pose::IDENTITY,
                 body: Arc::new(Body::empty()),
+                color: None,
             },
         );
         let mut names = BTreeMap::new();
@@ -308,6 +334,7 @@ impl PartsTree {
                 parts: Vec::new(),
                 pose,
                 body,
+                color: None,
             },
         );
     }

@@ -38,7 +38,7 @@ use super::camera::{Camera, CameraError, Light, LightError};
 use super::check::{Report, check_topology};
 use super::euler::EulerError;
 use super::ids::{EdgeId, FaceId, Serial, Serials, VertexId};
-use super::parts::{BodyId, BodyNode, Entity, PartsTree, validate_name};
+use super::parts::{BodyId, BodyNode, Color, Entity, PartsTree, validate_name};
 use super::pose::{Pose, PoseError};
 use super::solids::BuildError;
 use super::transform::{Frame, Transform, TransformError};
@@ -508,6 +508,15 @@ impl World {
         self.live_part(b, "posed")?;
         let pose = pose.validated()?;
         self.tree.get_mut(b).expect("checked").pose = pose;
+        self.written();
+        Ok(())
+    }
+
+    /// Sets (or with `None` clears) body `b`'s material colour. Refused for the root or
+    /// an unknown body.
+    pub fn set_color(&mut self, b: BodyId, color: Option<Color>) -> Result<(), WorldError> {
+        self.live_part(b, "coloured")?;
+        self.tree.get_mut(b).expect("checked").color = color;
         self.written();
         Ok(())
     }

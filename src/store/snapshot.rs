@@ -34,8 +34,10 @@ use super::error::StoreError;
 
 /// The first bytes of every snapshot file.
 pub const MAGIC: [u8; 8] = *b"WINGSNAP";
-/// The snapshot format this build writes and the newest it reads.
-pub const FORMAT_VERSION: u32 = 1;
+/// The snapshot format this build writes and reads. Version 2 added bodies' material
+/// colours; a version-1 snapshot is refused, and recovery falls back to an older snapshot
+/// or to replaying the journal (whose entries are version-independent JSON edits).
+pub const FORMAT_VERSION: u32 = 2;
 /// How many snapshots are kept; older ones are deleted after a new one is written.
 pub const KEEP: usize = 2;
 /// The snapshot directory's name inside a data directory.
@@ -58,7 +60,7 @@ pub enum SnapshotError {
     #[error("not a snapshot file (wrong magic bytes)")]
     BadMagic,
     /// A format version this build does not read.
-    #[error("format version {found} is newer than this program reads (up to {FORMAT_VERSION})")]
+    #[error("format version {found} is not the one this program reads ({FORMAT_VERSION})")]
     UnsupportedVersion {
         /// The version in the header.
         found: u32,
