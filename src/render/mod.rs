@@ -10,6 +10,7 @@
 
 pub mod image;
 pub mod lines;
+pub mod sample;
 pub mod scene;
 
 pub use image::{Gray16, RgbImage};
