@@ -88,6 +88,9 @@ struct ServeArgs {
     /// Changes kept for GET /v1/world/changes and event-stream catch-up.
     #[arg(long, default_value_t = 100_000)]
     history: usize,
+    /// The largest image appearance draws, in pixels (width × height).
+    #[arg(long, default_value_t = 4096 * 4096)]
+    max_render_pixels: u64,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -141,6 +144,7 @@ fn serve(args: ServeArgs) -> ExitCode {
             ..ActorConfig::default()
         },
         history: args.history,
+        max_render_pixels: args.max_render_pixels,
     };
     let options = Options {
         limits,

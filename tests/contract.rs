@@ -371,7 +371,7 @@ impl Contract {
         {
             panic!("{method} {path}: the contract refuses a valid request {b}:\n{e}");
         }
-        let write = method != "GET" && !template.starts_with("/v1/admin");
+        let write = method != "GET" && !template.starts_with("/v1/admin") && !is_read(template);
         let before = if write { self.revision() } else { 0 };
         let send = match &body {
             Some(b) => Send::Json(b),
@@ -435,6 +435,33 @@ impl Contract {
         r.json()
     }
 
+    /// A successful read whose answer is an image or a drawing (PNG, SVG or JSON): it
+    /// conforms to the request schema, succeeds with `media` and leaves the revision.
+    fn ok_drawing(
+        &self,
+        method: &str,
+        template: &str,
+        path: &str,
+        body: Option<Value>,
+        media: &str,
+    ) -> Reply {
+        if let (Some(b), Some(schema)) = (&body, self.request_schema(method, template))
+            && let Err(e) = self.v().validate(schema, b)
+        {
+            panic!("{method} {path}: the contract refuses a valid request {b}:\n{e}");
+        }
+        let before = self.revision();
+        let send = match &body {
+            Some(b) => Send::Json(b),
+            None => Send::Nothing,
+        };
+        let r = self.exchange(method, template, path, send);
+        assert_eq!(r.status, 200, "{method} {path}: {}", r.text);
+        assert_eq!(r.media_type, media, "{method} {path}");
+        assert_eq!(self.revision(), before, "{method} {path} is a read");
+        r
+    }
+
     /// A successful request whose answer is text (metrics, an event stream).
     fn ok_text(&self, method: &str, template: &str, path: &str) -> String {
         let r = self.exchange(method, template, path, Send::Nothing);
@@ -473,6 +500,11 @@ impl Contract {
         let p = format!("/v1/bodies/{body}/euler");
         self.ok("POST", "/v1/bodies/{id}/euler", &p, Some(op))
     }
+}
+
+/// Operations that use POST but only read.
+fn is_read(template: &str) -> bool {
+    template == "/v1/appearance"
 }
 
 fn matches_template(template: &str, path: &str) -> bool {
@@ -534,6 +566,7 @@ fn answers_match_the_contract() {
     transforms(&c);
     sweeps_duals_everts_copies(&c);
     cameras(&c);
+    appearance(&c);
     lights(&c);
     deletes(&c);
     following(&c, start);
@@ -1305,6 +1338,88 @@ fn cameras(c: &Contract) {
         "/v1/cameras/top",
         Send::Nothing,
         404,
+        Spec::Either,
+    );
+}
+
+fn appearance(c: &Contract) {
+    let (image, post) = ("/v1/cameras/{name}/image", "/v1/appearance");
+    let png = c.ok_drawing("GET", image, "/v1/cameras/eye/image", None, "image/png");
+    assert!(png.text.starts_with("\u{FFFD}PNG"), "a PNG signature");
+    for mode in ["wire", "hidden", "depth", "ids"] {
+        let path = format!("/v1/cameras/eye/image?mode={mode}&width=160");
+        c.ok_drawing("GET", image, &path, None, "image/png");
+    }
+    let lines = c.ok_drawing(
+        "GET",
+        image,
+        "/v1/cameras/eye/image?mode=hidden&format=json",
+        None,
+        "application/json",
+    );
+    assert!(!lines.json()["segments"].as_array().expect("segments").is_empty());
+    let ids = c.ok_drawing(
+        "GET",
+        image,
+        "/v1/cameras/eye/image?mode=ids&format=json",
+        None,
+        "application/json",
+    );
+    assert!(ids.json()["bodies"].as_array().expect("bodies").len() >= 5);
+    c.ok_drawing(
+        "GET",
+        image,
+        "/v1/cameras/eye/image?mode=hidden&format=svg",
+        None,
+        "image/svg+xml",
+    );
+    c.ok_drawing(
+        "POST",
+        post,
+        post,
+        Some(json!({"camera": "eye", "mode": "depth", "depth_scale": 0.0005})),
+        "image/png",
+    );
+    let inline = json!({
+        "camera": {
+            "look_at": {"eye": [2, -2, 2], "target": [0, 0, 0.75]},
+            "intrinsics": {"width": 64, "height": 48, "fx": 60, "fy": 60, "cx": 32, "cy": 24}
+        },
+        "mode": "hidden",
+        "format": "json"
+    });
+    c.ok_drawing("POST", post, post, Some(inline), "application/json");
+
+    let nobody = "/v1/cameras/nobody/image";
+    c.refused("GET", image, nobody, Send::Nothing, 404, Spec::Either);
+    let bogus = "/v1/cameras/eye/image?mode=bogus";
+    c.refused("GET", image, bogus, Send::Nothing, 400, Spec::Either);
+    let huge = "/v1/cameras/eye/image?width=16000&height=16000";
+    c.refused("GET", image, huge, Send::Nothing, 422, Spec::Either);
+    c.refused_json(
+        "POST",
+        post,
+        post,
+        json!({"camera": "eye", "mode": "sketch"}),
+        400,
+        Spec::Refuses,
+    );
+    c.refused_json(
+        "POST",
+        post,
+        post,
+        json!({"camera": "nobody"}),
+        404,
+        Spec::Either,
+    );
+    c.refused_json(
+        "POST",
+        post,
+        post,
+        json!({"camera": {"look_at": {"eye": [1, 1, 1], "target": [1, 1, 1]},
+                          "intrinsics": {"width": 8, "height": 8, "fx": 8, "fy": 8,
+                                         "cx": 4, "cy": 4}}}),
+        422,
         Spec::Either,
     );
 }

@@ -12,7 +12,7 @@ use winged::model::camera::BaumgartRaster;
 use winged::model::solids::mkcube;
 use winged::model::{
     Body, BodyId, Camera, CameraError, EdgeId, Entity, EulerError, FaceId, Frame, Intrinsics,
-    Light, LightError, Pose, PoseError, Serial, Serials, Transform, VertexId, World, WorldError,
+    Color, Light, LightError, Pose, PoseError, Serial, Serials, Transform, VertexId, World, WorldError,
     check_solid, check_topology,
 };
 
@@ -306,7 +306,7 @@ fn update_makes_all_its_changes_as_one_revision_or_none() {
     let before = dump_nodes(&w);
     // The rename would do, but the re-parenting makes a cycle.
     assert!(matches!(
-        w.update(a.upper, Some(Some("new")), Some(a.hand), None),
+        w.update(a.upper, Some(Some("new")), Some(a.hand), None, None),
         Err(WorldError::Cycle { .. })
     ));
     // The rename and the re-parenting would do, but the pose is refused.
@@ -315,16 +315,16 @@ fn update_makes_all_its_changes_as_one_revision_or_none() {
         rotation: DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0),
     };
     assert!(matches!(
-        w.update(a.hand, Some(Some("new")), Some(a.shoulder), Some(bad)),
+        w.update(a.hand, Some(Some("new")), Some(a.shoulder), Some(bad), None),
         Err(WorldError::Pose(PoseError::ZeroRotation { .. }))
     ));
     // The name is taken: refused before the other two are looked at.
     assert!(matches!(
-        w.update(a.hand, Some(Some("JOINT1")), Some(a.upper), Some(bad)),
+        w.update(a.hand, Some(Some("JOINT1")), Some(a.upper), Some(bad), None),
         Err(WorldError::DuplicateName { .. })
     ));
     assert!(matches!(
-        w.update(w.root(), Some(None), None, None),
+        w.update(w.root(), Some(None), None, None, None),
         Err(WorldError::Root { .. })
     ));
     assert_eq!(w.revision(), rev);
@@ -332,16 +332,23 @@ fn update_makes_all_its_changes_as_one_revision_or_none() {
 
     // All three at once: one revision; the pose is relative to the new supart.
     let pose = Pose::from_translation(DVec3::new(0.0, 1.0, 0.0));
-    w.update(a.hand, Some(Some("grip")), Some(a.shoulder), Some(pose))
+    w.update(a.hand, Some(Some("grip")), Some(a.shoulder), Some(pose), None)
         .unwrap();
     assert_eq!(w.revision(), rev + 1);
     assert_eq!(w.name(a.hand), Some("grip"));
+    w.update(a.hand, None, None, None, Some(Some(Color([1, 2, 3]))))
+        .unwrap();
+    assert_eq!(w.node(a.hand).unwrap().color, Some(Color([1, 2, 3])));
+    assert_eq!(w.revision(), rev + 2);
+    w.update(a.hand, None, None, None, Some(None)).unwrap();
+    assert_eq!(w.node(a.hand).unwrap().color, None);
     assert_eq!(w.find_by_name("HAND"), None);
     assert_eq!(w.supart(a.hand), Some(a.shoulder));
     assert_eq!(w.pose(a.hand), Some(pose));
     // Re-parenting alone keeps the world pose; removing the name frees it.
     let world_pose = w.world_pose(a.hand).unwrap();
-    w.update(a.hand, Some(None), Some(a.forearm), None).unwrap();
+    w.update(a.hand, Some(None), Some(a.forearm), None, None)
+        .unwrap();
     assert_eq!(w.name(a.hand), None);
     assert_eq!(w.find_by_name("grip"), None);
     assert!(
@@ -350,7 +357,7 @@ fn update_makes_all_its_changes_as_one_revision_or_none() {
             .position
             .abs_diff_eq(world_pose.position, 1e-12)
     );
-    assert_eq!(w.revision(), rev + 2);
+    assert_eq!(w.revision(), rev + 4);
     assert_sound(&w);
 }
 

@@ -438,6 +438,22 @@ impl World {
     where
         WorldError: From<E>,
     {
+        self.insert_colored_with(name, supart, pose, None, build)
+    }
+
+    /// [`World::insert_with`] giving the new body a material colour too, in the same
+    /// single write.
+    pub fn insert_colored_with<E>(
+        &mut self,
+        name: Option<&str>,
+        supart: BodyId,
+        pose: Pose,
+        color: Option<Color>,
+        build: impl FnOnce(&mut Serials) -> Result<Body, E>,
+    ) -> Result<BodyId, WorldError>
+    where
+        WorldError: From<E>,
+    {
         let (name, pose) = self.check_insert(name, supart, pose)?;
         let mut serials = self.serials.clone();
         let id = BodyId(serials.take());
@@ -451,6 +467,7 @@ impl World {
         };
         self.serials = serials;
         self.tree.add(id, name, supart, pose, Arc::new(body));
+        self.tree.get_mut(id).expect("just added").color = color;
         self.written();
         Ok(id)
     }
@@ -521,8 +538,9 @@ impl World {
         Ok(())
     }
 
-    /// Renames (`Some(None)` removes the name), re-parents and re-poses body `b` in one
-    /// write: either all of the given changes happen, as one revision, or none does.
+    /// Renames (`Some(None)` removes the name), re-parents, re-poses and re-colours
+    /// (`Some(None)` restores the default colour) body `b` in one write: either all of
+    /// the given changes happen, as one revision, or none does.
     /// The re-parenting happens before the new pose is set, so `pose` is relative to the
     /// new supart.
     ///
@@ -536,6 +554,7 @@ impl World {
         name: Option<Option<&str>>,
         supart: Option<BodyId>,
         pose: Option<Pose>,
+        color: Option<Option<Color>>,
     ) -> Result<(), WorldError> {
         // Plan: the same checks, in the same order, as rename, attach and set_pose.
         let name = match name {
@@ -559,6 +578,9 @@ impl World {
             }
             None => None,
         };
+        if color.is_some() {
+            self.live_part(b, "coloured")?;
+        }
         // Apply: nothing below can fail.
         if let Some(name) = name {
             self.tree.set_name(b, name);
@@ -570,6 +592,9 @@ impl World {
         }
         if let Some(pose) = pose {
             self.tree.get_mut(b).expect("checked").pose = pose;
+        }
+        if let Some(color) = color {
+            self.tree.get_mut(b).expect("checked").color = color;
         }
         self.written();
         Ok(())

@@ -66,10 +66,18 @@ pub fn blocks(count: usize, seed: u64) -> Result<World, WorldError> {
             position: DVec3::new(centre.x, centre.y, height / 2.0),
             rotation: turn,
         };
+        let c = rng.next_u64();
+        let color = Some(Color([
+            96 + (c & 0x7f) as u8,
+            96 + ((c >> 8) & 0x7f) as u8,
+            96 + ((c >> 16) & 0x7f) as u8,
+        ]));
         let kind = rng.next_u64() % 3;
-        let id = if kind < 2 {
+        if kind < 2 {
             let (dx, dy) = (rng.range(0.6, 2.0), rng.range(0.6, 2.0));
-            world.insert_with(None, root, pose, |s| solids::mkcube(s, dx, dy, height))?
+            world.insert_colored_with(None, root, pose, color, |s| {
+                solids::mkcube(s, dx, dy, height)
+            })?;
         } else {
             let sides = if rng.next_u64() % 2 == 0 { 3 } else { 6 };
             let r = rng.range(0.4, 1.0);
@@ -79,17 +87,10 @@ pub fn blocks(count: usize, seed: u64) -> Result<World, WorldError> {
                     DVec2::new(r * a.cos(), r * a.sin())
                 })
                 .collect();
-            world.insert_with(None, root, pose, |s| {
+            world.insert_colored_with(None, root, pose, color, |s| {
                 solids::prism_solid(s, &polygon, height)
-            })?
-        };
-        let c = rng.next_u64();
-        let color = Color([
-            96 + (c & 0x7f) as u8,
-            96 + ((c >> 8) & 0x7f) as u8,
-            96 + ((c >> 16) & 0x7f) as u8,
-        ]);
-        world.set_color(id, Some(color))?;
+            })?;
+        }
     }
     let sun = Light::sun(DVec3::new(-0.4, -0.3, -1.0), 0.8).expect("a valid sun");
     world.set_light("sun", sun)?;

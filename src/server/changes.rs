@@ -67,6 +67,8 @@ pub enum Field {
     Topology,
     /// Its vertex loci only; the structure is the same.
     Geometry,
+    /// Its material colour.
+    Color,
 }
 
 /// One entity touched by a write.
@@ -206,6 +208,9 @@ pub fn describe(
             }
             if patch.pose.is_some() || moved {
                 fields.push(Field::Pose);
+            }
+            if patch.color.is_some() {
+                fields.push(Field::Color);
             }
             changes.push(EntityChange::body(Updated, *body, &fields));
             if moved {

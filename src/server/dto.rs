@@ -8,7 +8,7 @@ use glam::{DQuat, DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::model::{
-    BaumgartRaster, Body, Camera, Intrinsics, Light, Pose, camera::CameraError, geometry::Bounds,
+    BaumgartRaster, Body, Camera, Color, Intrinsics, Light, Pose, camera::CameraError, geometry::Bounds,
 };
 
 /// A pose relative to the parent body.
@@ -143,6 +143,27 @@ pub enum Shape {
     },
 }
 
+/// A material colour in JSON: the string `"#rrggbb"`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HexColor(pub Color);
+
+impl Serialize for HexColor {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.0.to_hex())
+    }
+}
+
+impl<'de> Deserialize<'de> for HexColor {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(d)?;
+        Color::from_hex(&text).map(HexColor).ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "colour {text:?} is not of the form \"#rrggbb\" (hexadecimal)"
+            ))
+        })
+    }
+}
+
 /// `POST /v1/bodies`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -156,11 +177,15 @@ pub struct CreateBody {
     /// Pose relative to the supart (default: identity).
     #[serde(default)]
     pub pose: Option<PoseDto>,
+    /// Material colour `"#rrggbb"` (default: one chosen from the body's id).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<HexColor>,
     /// The solid.
     pub shape: Shape,
 }
 
-/// `PATCH /v1/bodies/{id}`: any of name, parent and pose. `"name": null` removes the name.
+/// `PATCH /v1/bodies/{id}`: any of name, parent, pose and colour. `"name": null` removes
+/// the name; `"color": null` restores the default colour.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Default)]
 #[serde(deny_unknown_fields)]
 pub struct PatchBody {
@@ -178,6 +203,14 @@ pub struct PatchBody {
     /// New pose relative to the supart.
     #[serde(default)]
     pub pose: Option<PoseDto>,
+    /// New material colour `"#rrggbb"`; `null` restores the default. Absent when
+    /// written out with no change of colour.
+    #[serde(
+        default,
+        deserialize_with = "some_or_null",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub color: Option<Option<HexColor>>,
 }
 
 fn some_or_null<'de, D, T>(d: D) -> Result<Option<Option<T>>, D::Error>
@@ -656,6 +689,8 @@ pub struct BodyDto {
     pub pose: PoseDto,
     /// Pose in the world.
     pub world_pose: PoseDto,
+    /// The material colour appearance draws it with (its own, or the default for its id).
+    pub color: HexColor,
     /// Counts.
     pub euler: EulerDto,
     /// Enclosed volume (m³; meaningful for closed bodies).

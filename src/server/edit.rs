@@ -431,8 +431,9 @@ pub fn apply(world: &mut World, edit: &Edit) -> Result<Outcome, EditError> {
                 return Err(WorldError::Root { what: "copied" }.into());
             }
             let node = world.node(b).expect("checked");
-            let (supart, pose, original) = (node.supart, node.pose, node.body.clone());
-            let id = world.insert_with(name.as_deref(), supart, pose, |s| {
+            let (supart, pose, color) = (node.supart, node.pose, node.color);
+            let original = node.body.clone();
+            let id = world.insert_colored_with(name.as_deref(), supart, pose, color, |s| {
                 Ok::<_, WorldError>(original.mkcopy(s))
             })?;
             let mut o = Outcome {
@@ -473,7 +474,8 @@ fn create(world: &mut World, req: &CreateBody) -> Result<Outcome, EditError> {
     let shape = &req.shape;
     // `insert_with` speaks `WorldError`; a shape's own error is kept aside here.
     let mut refused: Option<EditError> = None;
-    let id = world.insert_with(req.name.as_deref(), parent, pose, |s| {
+    let color = req.color.map(|c| c.0);
+    let id = world.insert_colored_with(req.name.as_deref(), parent, pose, color, |s| {
         build(shape, s).map_err(|e| {
             refused = Some(e);
             WorldError::NonFinite { what: "shape" }
@@ -499,7 +501,8 @@ fn create(world: &mut World, req: &CreateBody) -> Result<Outcome, EditError> {
 fn patch_body(world: &mut World, b: BodyId, patch: &PatchBody) -> Result<(), EditError> {
     let parent = patch.parent.map(|p| body_id(world, p)).transpose()?;
     let name = patch.name.as_ref().map(|n| n.as_deref());
-    world.update(b, name, parent, patch.pose.map(|p| p.to_pose()))?;
+    let color = patch.color.map(|c| c.map(|c| c.0));
+    world.update(b, name, parent, patch.pose.map(|p| p.to_pose()), color)?;
     Ok(())
 }
 

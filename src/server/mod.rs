@@ -60,6 +60,8 @@ pub struct Limits {
     pub actor: ActorConfig,
     /// Changes kept in memory for `GET /v1/world/changes` and stream catch-up.
     pub history: usize,
+    /// The largest image appearance draws, in pixels.
+    pub max_render_pixels: u64,
 }
 
 impl Default for Limits {
@@ -70,6 +72,7 @@ impl Default for Limits {
             max_in_flight: 4096,
             actor: ActorConfig::default(),
             history: 100_000,
+            max_render_pixels: api::appearance::MAX_RENDER_PIXELS,
         }
     }
 }
@@ -128,6 +131,7 @@ pub fn build<J: Journal>(
         feed: feed.clone(),
         tokens,
         metrics: metrics.clone(),
+        appearance: Arc::new(api::appearance::Appearance::new(limits.max_render_pixels)),
     };
     let one_line_per_request = TraceLayer::new_for_http()
         .make_span_with(DefaultMakeSpan::new().level(Level::INFO))

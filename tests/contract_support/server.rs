@@ -131,10 +131,12 @@ impl Http {
                     .to_ascii_lowercase()
             })
             .unwrap_or_default();
-        let text = res
+        // Images are read as bytes; the text is for JSON and text answers.
+        let bytes = res
             .body_mut()
-            .read_to_string()
+            .read_to_vec()
             .unwrap_or_else(|e| panic!("{method} {path}: reading the answer: {e}"));
+        let text = String::from_utf8_lossy(&bytes).into_owned();
         Reply {
             status: res.status().as_u16(),
             media_type,

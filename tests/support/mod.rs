@@ -91,15 +91,25 @@ impl TestServer {
     }
 }
 
-/// An answer: status, content type and body (JSON when it parses).
+/// An answer: status, content type, headers and body (as bytes, and as text for JSON).
 #[derive(Debug)]
 pub struct Reply {
     pub status: u16,
     pub content_type: String,
     pub text: String,
+    pub bytes: Vec<u8>,
+    pub headers: ureq::http::HeaderMap,
 }
 
 impl Reply {
+    /// A header's value as text ("" if absent).
+    pub fn header(&self, name: &str) -> &str {
+        self.headers
+            .get(name)
+            .and_then(|v| v.to_str().ok())
+            .unwrap_or("")
+    }
+
     pub fn json(&self) -> Value {
         serde_json::from_str(&self.text).unwrap_or_else(|e| panic!("not JSON ({e}): {}", self.text))
     }
@@ -142,16 +152,19 @@ impl From<Result<ureq::http::Response<ureq::Body>, ureq::Error>> for Reply {
             .and_then(|v| v.to_str().ok())
             .unwrap_or("")
             .to_string();
-        let text = res
+        let headers = res.headers().clone();
+        let bytes = res
             .body_mut()
             .with_config()
             .limit(512 * 1024 * 1024)
-            .read_to_string()
+            .read_to_vec()
             .expect("a body");
         Reply {
             status,
             content_type,
-            text,
+            text: String::from_utf8_lossy(&bytes).into_owned(),
+            bytes,
+            headers,
         }
     }
 }

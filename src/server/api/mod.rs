@@ -4,6 +4,7 @@
 //! Each route is marked with the role it needs ([`reads`], [`writes`], [`admin`]); with
 //! tokens configured, a request without the role is refused before its handler runs.
 
+pub mod appearance;
 mod feed;
 mod model;
 mod ops;
@@ -44,6 +45,8 @@ pub struct AppState {
     pub tokens: Arc<Tokens>,
     /// The server's metrics.
     pub metrics: Arc<Metrics>,
+    /// Scenes and turns for renderings.
+    pub appearance: Arc<appearance::Appearance>,
 }
 
 impl FromRef<AppState> for Handle {
@@ -101,6 +104,11 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         .route("/v1/bodies/{id}/evert", writes(post(evert)))
         .route("/v1/bodies/{id}/copy", writes(post(copy)))
         .route("/v1/cameras", reads(get(list_cameras)))
+        .route(
+            "/v1/cameras/{name}/image",
+            reads(get(appearance::camera_image)),
+        )
+        .route("/v1/appearance", reads(post(appearance::appearance)))
         .route(
             "/v1/cameras/{name}",
             reads(get(get_camera))
