@@ -2,7 +2,8 @@
 //!
 //! Rendering reads a [`Scene`], the world flattened for drawing at one revision, and
 //! never touches the shared world. [`scene`] builds it; [`image`] holds the raster
-//! images and their PNG encoding; [`lines`] draws anti-aliased lines.
+//! images and their PNG encoding; [`lines`] draws anti-aliased lines; [`raster`] makes
+//! the pixel pictures (z-buffer, shaded, wireframe, depth and body ids).
 //!
 //! Every mode starts from the same camera ([`crate::camera::View`]) and the same clipping
 //! at the near plane, so a pixel of the `ids` image, a depth value and a hidden-line
@@ -10,6 +11,7 @@
 
 pub mod image;
 pub mod lines;
+pub mod raster;
 pub mod sample;
 pub mod scene;
 
