@@ -494,7 +494,7 @@ impl Scratch {
 /// Adds `[lo, hi]` to the sorted, disjoint list `hidden`, merging intervals that overlap
 /// or are closer than [`MIN_PIECE`]. Intervals shorter than that are ignored.
 fn add_interval(hidden: &mut Vec<(f64, f64)>, lo: f64, hi: f64) {
-    if !(hi - lo >= MIN_PIECE) {
+    if !at_least(hi - lo, MIN_PIECE) {
         return;
     }
     let i = hidden.partition_point(|&(_, h)| h < lo - MIN_PIECE);
@@ -506,6 +506,12 @@ fn add_interval(hidden: &mut Vec<(f64, f64)>, lo: f64, hi: f64) {
         j += 1;
     }
     hidden.splice(i..j, [(lo, hi)]);
+}
+
+/// `x ≥ min`, false when `x` is NaN.
+#[inline]
+fn at_least(x: f64, min: f64) -> bool {
+    x >= min
 }
 
 /// Even-odd rule: whether pixel `q` lies inside the polygon `poly`.
@@ -577,7 +583,7 @@ impl Context<'_> {
             d: b - a,
             scale: a.length().max(b.length()),
         };
-        if !(piece.d.length() > MIN_PIECE * piece.scale) {
+        if !at_least(piece.d.length(), MIN_PIECE * piece.scale) {
             return Vec::new();
         }
         let (pa, pb) = (self.view.project(a), self.view.project(b));
@@ -668,7 +674,7 @@ impl Context<'_> {
         let (mut lo, mut hi) = (0.0f64, 1.0f64);
         let ds = sb - sa;
         if ds == 0.0 {
-            if !(sa < -tol) {
+            if sa.is_nan() || sa >= -tol {
                 return;
             }
         } else {
@@ -679,7 +685,7 @@ impl Context<'_> {
                 lo = lo.max(t);
             }
         }
-        if !(hi - lo >= MIN_PIECE) {
+        if !at_least(hi - lo, MIN_PIECE) {
             return;
         }
         // (b) Inside the polygon as seen from the eye: may change only where the segment
