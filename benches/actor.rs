@@ -54,6 +54,7 @@ async fn create_box(h: &Handle) -> u64 {
             name: None,
             parent: None,
             pose: None,
+            color: None,
             shape: Shape::Box {
                 size: [2.0, 2.0, 2.0],
             },

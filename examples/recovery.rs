@@ -195,6 +195,7 @@ fn build(data: &Path, side: &Path, entries: u64) -> Result<World, Box<dyn std::e
             name: Some(format!("body{i}")),
             parent,
             pose: Some(random_pose(&mut rng)),
+            color: None,
             shape,
         }))?;
         bodies.push(o.id.ok_or("a create answers with the id")?);

@@ -185,7 +185,10 @@ fn hidden_lines_come_as_png_json_and_svg() {
         .map(|seg| seg["edge"].as_u64().unwrap())
         .collect();
     assert_eq!(edges.len(), 9, "a cube in general position shows 9 edges");
-    assert_eq!((j["width"].as_u64(), j["height"].as_u64()), (Some(320), Some(240)));
+    assert_eq!(
+        (j["width"].as_u64(), j["height"].as_u64()),
+        (Some(320), Some(240))
+    );
     let r = s.get("/v1/cameras/eye/image?mode=hidden&format=svg");
     assert_eq!(r.status, 200);
     assert_eq!(r.content_type, "image/svg+xml");
@@ -223,7 +226,7 @@ fn cameras_inside_or_facing_away_draw_correct_images() {
     // Facing away: nothing in view, every pixel is background.
     let away = s.post(
         "/v1/appearance",
-        &json!({"camera": {"look_at": {"eye": [0, 0, 3], "target": [0, 0, 6]}, "intrinsics": k},
+        &json!({"camera": {"look_at": {"eye": [0, 0, 3], "target": [0.5, 0.2, 6]}, "intrinsics": k},
                 "mode": "ids"}),
     );
     assert_eq!(away.status, 200, "{}", away.text);
@@ -327,7 +330,10 @@ fn a_drawing_follows_the_world() {
         &json!({"pose": {"position": [0, 0, 0]}, "color": "#ff0000"}),
     )
     .ok();
-    assert_eq!(s.get(&format!("/v1/bodies/{cube}")).ok()["color"], "#ff0000");
+    assert_eq!(
+        s.get(&format!("/v1/bodies/{cube}")).ok()["color"],
+        "#ff0000"
+    );
     let shaded = Png::decode(&s.get("/v1/cameras/eye/image?shadows=false").bytes);
     let c = shaded.at(W / 2, H / 2);
     assert!(c[0] > 0 && c[1] == 0 && c[2] == 0, "a red cube: {c:?}");

@@ -1357,7 +1357,12 @@ fn appearance(c: &Contract) {
         None,
         "application/json",
     );
-    assert!(!lines.json()["segments"].as_array().expect("segments").is_empty());
+    assert!(
+        !lines.json()["segments"]
+            .as_array()
+            .expect("segments")
+            .is_empty()
+    );
     let ids = c.ok_drawing(
         "GET",
         image,

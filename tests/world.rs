@@ -11,9 +11,9 @@ use proptest::prelude::*;
 use winged::model::camera::BaumgartRaster;
 use winged::model::solids::mkcube;
 use winged::model::{
-    Body, BodyId, Camera, CameraError, EdgeId, Entity, EulerError, FaceId, Frame, Intrinsics,
-    Color, Light, LightError, Pose, PoseError, Serial, Serials, Transform, VertexId, World, WorldError,
-    check_solid, check_topology,
+    Body, BodyId, Camera, CameraError, Color, EdgeId, Entity, EulerError, FaceId, Frame,
+    Intrinsics, Light, LightError, Pose, PoseError, Serial, Serials, Transform, VertexId, World,
+    WorldError, check_solid, check_topology,
 };
 
 use common::dump;
@@ -332,8 +332,14 @@ fn update_makes_all_its_changes_as_one_revision_or_none() {
 
     // All three at once: one revision; the pose is relative to the new supart.
     let pose = Pose::from_translation(DVec3::new(0.0, 1.0, 0.0));
-    w.update(a.hand, Some(Some("grip")), Some(a.shoulder), Some(pose), None)
-        .unwrap();
+    w.update(
+        a.hand,
+        Some(Some("grip")),
+        Some(a.shoulder),
+        Some(pose),
+        None,
+    )
+    .unwrap();
     assert_eq!(w.revision(), rev + 1);
     assert_eq!(w.name(a.hand), Some("grip"));
     w.update(a.hand, None, None, None, Some(Some(Color([1, 2, 3]))))

@@ -53,9 +53,9 @@ impl RgbImage {
         }
         let a = alpha.clamp(0.0, 1.0);
         let i = (y as usize * self.width as usize + x as usize) * 3;
-        for k in 0..3 {
-            let old = self.data[i + k] as f64;
-            self.data[i + k] = (old + (c[k] as f64 - old) * a).round() as u8;
+        for (px, &ck) in self.data[i..i + 3].iter_mut().zip(&c) {
+            let old = *px as f64;
+            *px = (old + (ck as f64 - old) * a).round() as u8;
         }
     }
 

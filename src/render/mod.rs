@@ -3,12 +3,15 @@
 //! Rendering reads a [`Scene`], the world flattened for drawing at one revision, and
 //! never touches the shared world. [`scene`] builds it; [`image`] holds the raster
 //! images and their PNG encoding; [`lines`] draws anti-aliased lines; [`raster`] makes
-//! the pixel pictures (z-buffer, shaded, wireframe, depth and body ids).
+//! the pixel pictures (z-buffer, shaded, wireframe, depth and body ids); [`hidden`]
+//! computes the exact hidden-line drawing as vector segments (and draws it, or writes it
+//! as SVG); [`render`] chooses among them by [`Mode`].
 //!
 //! Every mode starts from the same camera ([`crate::camera::View`]) and the same clipping
 //! at the near plane, so a pixel of the `ids` image, a depth value and a hidden-line
 //! segment all describe the same picture.
 
+pub mod hidden;
 pub mod image;
 pub mod lines;
 pub mod raster;
@@ -151,14 +154,10 @@ pub fn render(
                 background: options.background,
                 ambient: options.ambient,
                 shadows: options.shadows,
+                ..raster::Shading::default()
             },
         )),
-        Mode::Wire => Picture::Rgb(raster::wire(
-            scene,
-            &view,
-            options.background,
-            options.ink,
-        )),
+        Mode::Wire => Picture::Rgb(raster::wire(scene, &view, options.background, options.ink)),
         Mode::Hidden => Picture::Lines {
             segments: hidden::hidden_lines(scene, &view),
             width,

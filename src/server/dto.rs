@@ -8,7 +8,8 @@ use glam::{DQuat, DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::model::{
-    BaumgartRaster, Body, Camera, Color, Intrinsics, Light, Pose, camera::CameraError, geometry::Bounds,
+    BaumgartRaster, Body, Camera, Color, Intrinsics, Light, Pose, camera::CameraError,
+    geometry::Bounds,
 };
 
 /// A pose relative to the parent body.

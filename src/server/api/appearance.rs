@@ -18,12 +18,12 @@ use axum::extract::rejection::{JsonRejection, PathRejection, QueryRejection};
 use axum::extract::{Path, Query, State};
 use axum::http::StatusCode;
 use axum::http::header::{CONTENT_TYPE, ETAG, HeaderName, HeaderValue};
-use axum::response::{IntoResponse, Response};
+use axum::response::IntoResponse;
 use serde::{Deserialize, Serialize};
 use tokio::sync::Semaphore;
 
 use super::precondition::etag;
-use super::{AppState, Answer, snapshot};
+use super::{Answer, AppState, snapshot};
 use crate::camera::Camera;
 use crate::model::World;
 use crate::render::hidden::{self, Segment};
@@ -44,7 +44,7 @@ pub struct Appearance {
     /// Held while a scene is built, so that one revision is built once.
     building: Mutex<()>,
     /// Renderings allowed at once.
-    permits: Semaphore,
+    permits: Arc<Semaphore>,
     /// The largest image, in pixels.
     max_pixels: u64,
 }
@@ -57,7 +57,7 @@ impl Appearance {
         Appearance {
             latest: Mutex::new(None),
             building: Mutex::new(()),
-            permits: Semaphore::new(cores),
+            permits: Arc::new(Semaphore::new(cores)),
             max_pixels,
         }
     }
@@ -190,7 +190,7 @@ pub enum CameraRef {
     /// The name of a camera in the world.
     Named(String),
     /// A camera as `PUT /v1/cameras/{name}` takes it.
-    Inline(CameraReq),
+    Inline(Box<CameraReq>),
 }
 
 /// A drawing checked and resolved against a camera.
@@ -255,7 +255,9 @@ impl Drawing {
         }
         if let Some(near) = self.near {
             if !near.is_finite() || near <= 0.0 {
-                return Err(bad(format!("near {near} must be a positive number of meters")));
+                return Err(bad(format!(
+                    "near {near} must be a positive number of meters"
+                )));
             }
             options.near = near;
         }
@@ -284,8 +286,14 @@ fn resize(camera: Camera, width: Option<u32>, height: Option<u32>) -> Result<Cam
     let (w, h) = match (width, height) {
         (None, None) => return Ok(camera),
         (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, (h0 * w as f64 / w0).round().max(1.0).min(u32::MAX as f64) as u32),
-        (None, Some(h)) => ((w0 * h as f64 / h0).round().max(1.0).min(u32::MAX as f64) as u32, h),
+        (Some(w), None) => (
+            w,
+            (h0 * w as f64 / w0).round().max(1.0).min(u32::MAX as f64) as u32,
+        ),
+        (None, Some(h)) => (
+            (w0 * h as f64 / h0).round().max(1.0).min(u32::MAX as f64) as u32,
+            h,
+        ),
     };
     let (sx, sy) = (w as f64 / w0, h as f64 / h0);
     let intrinsics =
@@ -338,15 +346,16 @@ async fn draw(state: &AppState, camera: CameraRef, drawing: Drawing) -> Answer {
     let plan = drawing.plan(camera, appearance.max_pixels)?;
     let _turn = appearance
         .permits
-        .acquire()
+        .clone()
+        .acquire_owned()
         .await
         .map_err(|_| Problem::unavailable())?;
     let revision = world.revision();
     let started = std::time::Instant::now();
     let answer = tokio::task::spawn_blocking(move || {
         let scene = appearance.scene(&world);
-        let picture = render::render(&scene, &plan.camera, plan.mode, &plan.options)
-            .map_err(|e| {
+        let picture =
+            render::render(&scene, &plan.camera, plan.mode, &plan.options).map_err(|e| {
                 Problem::new(
                     StatusCode::UNPROCESSABLE_ENTITY,
                     "render-refused",
@@ -467,8 +476,7 @@ fn encode(scene: &Scene, picture: Picture, format: Format, options: &Options) ->
                 headers: Vec::new(),
             },
             Format::Png => png(
-                hidden::draw(&segments, width, height, options.background, options.ink)
-                    .to_png(),
+                hidden::draw(&segments, width, height, options.background, options.ink).to_png(),
                 Vec::new(),
             ),
         },

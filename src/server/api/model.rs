@@ -13,8 +13,8 @@ use super::{Answer, HeavyReads, read_answer, snapshot, world_size, write};
 use crate::model::{BodyId, Serial, World};
 use crate::server::actor::Handle;
 use crate::server::dto::{
-    BodyDto, CameraDto, HexColor, CameraReq, CopyReq, CreateBody, EdgeDto, EulerOp, FaceDto, LightDto,
-    PatchBody, SweepReq, TopologyDto, TransformReq, VertexDto, euler_of,
+    BodyDto, CameraDto, CameraReq, CopyReq, CreateBody, EdgeDto, EulerOp, FaceDto, HexColor,
+    LightDto, PatchBody, SweepReq, TopologyDto, TransformReq, VertexDto, euler_of,
 };
 use crate::server::edit::Edit;
 use crate::server::problem::Problem;
@@ -54,7 +54,10 @@ fn body_dto(w: &World, b: BodyId) -> Option<BodyDto> {
         parts: node.parts.iter().map(|p| p.get()).collect(),
         pose: node.pose.into(),
         world_pose: w.world_pose(b)?.into(),
-        color: HexColor(node.color.unwrap_or_else(|| crate::render::default_color(b))),
+        color: HexColor(
+            node.color
+                .unwrap_or_else(|| crate::render::default_color(b)),
+        ),
         euler: euler_of(body),
         volume: body.volume(),
         area: body.surface_area(),
