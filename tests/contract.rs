@@ -228,15 +228,18 @@ fn the_contract_is_well_formed() {
                 if !r["description"].is_string() {
                     problems.push(format!("{at} {code}: no description"));
                 }
-                // Answers are JSON, except the metrics text and the event stream.
-                let want_media = if !code.starts_with('2') {
-                    "application/problem+json"
+                // Answers are JSON, except the metrics text, the event stream and
+                // drawings (PNG, SVG or JSON).
+                let want_media: &[&str] = if !code.starts_with('2') {
+                    &["application/problem+json"]
                 } else if at.contains("/metrics") {
-                    "application/openmetrics-text"
+                    &["application/openmetrics-text"]
                 } else if at.contains("/v1/world/events") {
-                    "text/event-stream"
+                    &["text/event-stream"]
+                } else if at.contains("/image") || at.contains("/v1/appearance") {
+                    &["application/json", "image/png", "image/svg+xml"]
                 } else {
-                    "application/json"
+                    &["application/json"]
                 };
                 let media: Vec<&String> = r["content"]
                     .as_object()
@@ -244,9 +247,9 @@ fn the_contract_is_well_formed() {
                     .flatten()
                     .map(|(k, _)| k)
                     .collect();
-                if media != [want_media] {
+                if media != want_media {
                     problems.push(format!(
-                        "{at} {code}: media types {media:?}, want {want_media}"
+                        "{at} {code}: media types {media:?}, want {want_media:?}"
                     ));
                 }
             }
