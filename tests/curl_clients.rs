@@ -139,6 +139,10 @@ fn demo_tour_reads_the_demo_scene() {
         "eye: at ",
         "640x480 px",
         "sun: light travelling along ",
+        "  shaded: ",
+        "  ids: ",
+        "visible segments",
+        "bodies in view: ",
         "demo_tour: ok",
     ] {
         assert!(out.contains(want), "missing {want:?} in:\n{out}");

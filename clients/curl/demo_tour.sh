@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A tour of the demo scene (start the server with `winged serve --demo`): the world's
 # counts, the bodies on the hand-eye table, one body, a block's winged-edge topology, the
-# cameras and the light. It only reads, so it can run any number of times.
+# cameras and the light, and what the camera sees. It only reads, so it can run any
+# number of times.
 #
 #   WINGED=http://127.0.0.1:7878 bash clients/curl/demo_tour.sh
 set -euo pipefail
@@ -52,5 +53,20 @@ echo "lights: $(field "$r" lights.length)"
 r=$(call GET /v1/lights/sun)
 IFS=$'\t' read -r along intensity <<<"$(field "$r" direction intensity)"
 echo "sun: light travelling along $along, intensity $intensity"
+
+echo "# What the camera eye sees (set OUT=DIR to keep the images)"
+out="${OUT:-$(mktemp -d)}"
+mkdir -p "$out"
+for mode in shaded hidden depth ids; do
+    [ "${QUIET:-0}" = 1 ] || echo "\$ curl -o $mode.png \$WINGED/v1/cameras/eye/image?mode=$mode" >&3
+    curl -sf -o "$out/$mode.png" "$WINGED/v1/cameras/eye/image?mode=$mode"
+    magic=$(head -c 4 "$out/$mode.png" | tail -c 3)
+    expect "$mode is a PNG" "$magic" PNG
+    echo "  $mode: $(wc -c <"$out/$mode.png") bytes"
+done
+r=$(BRIEF=1 call GET "/v1/cameras/eye/image?mode=hidden&format=json")
+echo "hidden lines: $(field "$r" segments.length) visible segments"
+r=$(BRIEF=1 call GET "/v1/cameras/eye/image?mode=ids&format=json")
+echo "bodies in view: $(field "$r" bodies.length)"
 
 echo "demo_tour: ok ($n bodies, camera eye, light sun)"
