@@ -935,6 +935,32 @@ fn block_worlds_agree_with_a_supersampled_depth_buffer() {
     }
 }
 
+/// Boxes that touch: towers of unit cubes on a grid, each cube on the one below and
+/// against its neighbours, so faces meet in a plane, edges coincide and corners meet.
+#[test]
+fn touching_boxes_agree_with_a_supersampled_depth_buffer() {
+    let mut w = World::new();
+    let mut keep_out = Vec::new();
+    let mut rng = SplitMix64::new(17);
+    for i in 0..4 {
+        for j in 0..4 {
+            let height = 1 + rng.next_u64() % 3;
+            for k in 0..height {
+                let c = DVec3::new(i as f64 - 1.5, j as f64 - 1.5, k as f64 + 0.5);
+                add_box(&mut w, c, DQuat::IDENTITY, DVec3::ONE);
+                keep_out.push((c, 0.9));
+            }
+        }
+    }
+    let s = Scene::build(&w);
+    for (i, v) in random_views(&mut rng, 6, &keep_out, 240, 180)
+        .iter()
+        .enumerate()
+    {
+        assert_agrees(&s, v, &format!("touching boxes camera {i}"));
+    }
+}
+
 #[test]
 fn the_oracle_rejects_wrong_drawings() {
     let (w, keep_out) = random_solids(40, 11);

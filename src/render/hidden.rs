@@ -62,9 +62,9 @@ use crate::model::BodyId;
 pub const MIN_PIECE: f64 = 1e-9;
 
 /// Relative tolerance of "strictly behind a face's plane": a point must lie behind it by
-/// more than this times (its distance from the eye + the plane's distance from the eye),
-/// so edges lying in a face's plane (touching bodies, a face's own corners) are not hidden
-/// by it.
+/// more than this times (the farthest distance of its segment from the eye + the plane's
+/// distance from the eye), so edges lying in a face's plane (touching bodies, a face's own
+/// corners) are not hidden by it.
 const PLANE_TOL: f64 = 1e-9;
 
 /// Polygons with more corners than this are treated as concave (the convexity test is
@@ -110,9 +110,9 @@ fn body_number<S: Serializer>(id: &BodyId, s: S) -> Result<S::Ok, S::Error> {
 /// Postconditions: every segment is a visible piece of one edge with finite ends inside
 /// the image window `[0, width] × [0, height]` (up to rounding) and depths ≥ the near
 /// distance; pieces of one edge do not overlap; the order is deterministic: by body (id
-/// order), then edge serial, then along the edge from NVT to PVT. A camera inside a body,
-/// or with everything behind it, gives the (possibly empty) drawing of what remains in
-/// front of the near plane.
+/// order), then edge serial, then along the edge from NVT to PVT. Nothing panics for any
+/// scene and view: a camera inside a body sees all its faces from behind, so that body
+/// neither shows nor hides anything; a scene wholly behind the camera gives no segments.
 pub fn hidden_lines(scene: &Scene, view: &View) -> Vec<Segment> {
     let eye = view.eye();
     let cam: Vec<DVec3> = scene
@@ -557,7 +557,8 @@ impl Grid {
     fn walk(&self, p: DVec2, q: DVec2, mut visit: impl FnMut(usize) -> bool) -> bool {
         const PAD: f64 = 1e-6;
         let d = q - p;
-        // Work along the major axis: `major` picks a point's coordinate along it.
+        // Work along the major axis: index `along` picks a point's coordinate along it,
+        // `across` the other one.
         let steep = d.y.abs() > d.x.abs();
         let (along, across) = if steep { (1, 0) } else { (0, 1) };
         let (n_along, n_across) = if steep {
@@ -786,7 +787,6 @@ impl Context<'_> {
         }
 
         // The complement of the hidden intervals in [0, 1].
-
         let mut from = 0.0;
         let mut push = |t0: f64, t1: f64| {
             if t1 - t0 >= MIN_PIECE {
