@@ -320,6 +320,122 @@ fn an_l_prism_hides_part_of_itself() {
     assert_eq!(cut, 2);
 }
 
+/// The pieces of the 2D segment `p`–`q` outside every convex polygon of `hulls`.
+fn outside_all(hulls: &[Vec<DVec2>], p: DVec2, q: DVec2) -> Vec<(DVec2, DVec2)> {
+    let mut cover: Vec<(f64, f64)> = hulls.iter().filter_map(|h| inside_range(h, p, q)).collect();
+    cover.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out = Vec::new();
+    let mut from = 0.0;
+    for (s0, s1) in cover {
+        if s0 > from + 1e-12 {
+            out.push((from, s0));
+        }
+        from = f64::max(from, s1);
+    }
+    if from < 1.0 - 1e-12 {
+        out.push((from, 1.0));
+    }
+    let at = |s: f64| p + (q - p) * s;
+    out.into_iter().map(|(a, b)| (at(a), at(b))).collect()
+}
+
+/// `hull` of some points, counter-clockwise in the `perp_dot` sense.
+fn ccw_hull(pts: Vec<DVec2>) -> Vec<DVec2> {
+    let mut h = hull(pts);
+    let area: f64 = (0..h.len())
+        .map(|i| h[i].perp_dot(h[(i + 1) % h.len()]))
+        .sum();
+    if area < 0.0 {
+        h.reverse();
+    }
+    h
+}
+
+#[test]
+fn a_concave_plate_hides_a_bar_except_under_its_notch() {
+    let mut w = World::new();
+    let root = w.root();
+    // An L-shaped plate, z ∈ [0.9, 1.1], its notch over x, y ∈ (0, 1); below it a bar
+    // along x that passes under one arm, the notch and out beyond the plate.
+    let plate = Pose::from_translation(DVec3::new(0.0, 0.0, 1.0));
+    w.insert_with(None, root, plate, |s| {
+        solids::prism_solid(s, &l_shape(1.0), 0.2)
+    })
+    .unwrap();
+    add_box(
+        &mut w,
+        DVec3::new(0.0, 0.5, 0.0),
+        DQuat::IDENTITY,
+        DVec3::new(3.0, 0.2, 0.2),
+    );
+    let s = Scene::build(&w);
+    let k = Intrinsics::centered(800, 600, 450.0).unwrap();
+    let cam = Camera::look_at(
+        DVec3::new(0.23, 0.17, 6.0),
+        DVec3::new(0.1, 0.05, 0.0),
+        DVec3::Y,
+        k,
+    )
+    .unwrap();
+    let v = View::new(&cam, camera::DEFAULT_NEAR);
+    let segs = hidden::hidden_lines(&s, &v);
+    check_sane(&s, &v, &segs);
+    let eye = v.eye();
+    // The plate's projection: the union of its two arms' (convex) projections.
+    let arm = |x0: f64, x1: f64, y0: f64, y1: f64| {
+        let mut pts = Vec::new();
+        for x in [x0, x1] {
+            for y in [y0, y1] {
+                for z in [0.9, 1.1] {
+                    pts.push(pixel(&v, DVec3::new(x, y, z)));
+                }
+            }
+        }
+        ccw_hull(pts)
+    };
+    let arms = [arm(-1.0, 1.0, -1.0, 0.0), arm(-1.0, 0.0, 0.0, 1.0)];
+    let plate_id = s.bodies[0].id;
+    // The top cap is concave and faces the eye: the general (not convex) path runs.
+    assert!(
+        s.faces
+            .iter()
+            .any(|f| f.body == 0 && f.faces_toward(eye) && s.ring(f).len() == 6)
+    );
+    let mut expected = Vec::new();
+    for e in &s.edges {
+        if !e
+            .faces
+            .iter()
+            .any(|&f| s.faces[f as usize].faces_toward(eye))
+        {
+            continue;
+        }
+        let body = s.bodies[e.body as usize].id;
+        let [p, q] = e.ends.map(|i| pixel(&v, s.points[i as usize]));
+        let pieces = if body == plate_id {
+            vec![(p, q)]
+        } else {
+            outside_all(&arms, p, q)
+        };
+        expected.extend(
+            pieces
+                .into_iter()
+                .map(|(a, b)| (body.get(), e.serial, a, b)),
+        );
+    }
+    expected.sort_by_key(|x| (x.0, x.1));
+    assert_eq!(segs.len(), expected.len(), "{segs:#?}\n{expected:#?}");
+    for (g, x) in segs.iter().zip(&expected) {
+        assert_eq!((g.body.get(), g.edge), (x.0, x.1));
+        assert!((g.a - x.2).length() < 1e-6, "{g:?} vs {x:?}");
+        assert!((g.b - x.3).length() < 1e-6, "{g:?} vs {x:?}");
+    }
+    // The bar's three long edges show two pieces each (before the plate, and from the
+    // notch on), its four short edges one each.
+    let bar_pieces = segs.iter().filter(|g| g.body != plate_id).count();
+    assert_eq!(bar_pieces, 10, "{segs:#?}");
+}
+
 #[test]
 fn degenerate_cameras_give_sane_drawings() {
     let mut w = World::new();
@@ -661,10 +777,26 @@ fn judge(s: &Scene, v: &View, segs: &[Segment]) -> Verdict {
     verdict
 }
 
-/// A world of `n` boxes of random sizes and orientations that do not overlap (their
-/// bounding spheres are apart), in a cube of side 8 about the origin, and the box
-/// centres and radii.
-fn random_boxes(n: usize, seed: u64) -> (World, Vec<(DVec3, f64)>) {
+/// The L-shaped hexagon of [`an_l_prism_hides_part_of_itself`], scaled by `s` and
+/// centred on the origin (its corners lie within `s·√2` of it).
+fn l_shape(s: f64) -> Vec<DVec2> {
+    [
+        (0.0, 0.0),
+        (2.0, 0.0),
+        (2.0, 1.0),
+        (1.0, 1.0),
+        (1.0, 2.0),
+        (0.0, 2.0),
+    ]
+    .iter()
+    .map(|&(x, y)| (DVec2::new(x, y) - DVec2::ONE) * s)
+    .collect()
+}
+
+/// A world of `n` solids of random sizes and orientations that do not overlap (their
+/// bounding spheres are apart) in a cube of side 8 about the origin: boxes, and one in
+/// three a concave L-prism. Also the solids' centres and bounding radii.
+fn random_solids(n: usize, seed: u64) -> (World, Vec<(DVec3, f64)>) {
     let mut rng = SplitMix64::new(seed);
     let mut w = World::new();
     let mut placed: Vec<(DVec3, f64)> = Vec::new();
@@ -676,7 +808,12 @@ fn random_boxes(n: usize, seed: u64) -> (World, Vec<(DVec3, f64)>) {
             rng.range(0.3, 1.6),
             rng.range(0.3, 1.6),
         );
-        let r = size.length() / 2.0;
+        let prism = rng.next_u64().is_multiple_of(3);
+        let r = if prism {
+            (2.0 * (size.x / 2.0).powi(2) + (size.z / 2.0).powi(2)).sqrt()
+        } else {
+            size.length() / 2.0
+        };
         let c = DVec3::new(
             rng.range(-4.0, 4.0),
             rng.range(-4.0, 4.0),
@@ -692,7 +829,18 @@ fn random_boxes(n: usize, seed: u64) -> (World, Vec<(DVec3, f64)>) {
         )
         .normalize_or(DVec3::Z);
         let rot = DQuat::from_axis_angle(axis, rng.range(0.0, std::f64::consts::TAU));
-        add_box(&mut w, c, rot, size);
+        if prism {
+            let root = w.root();
+            let pose = Pose {
+                position: c,
+                rotation: rot,
+            };
+            let l = l_shape(size.x / 2.0);
+            w.insert_with(None, root, pose, |s| solids::prism_solid(s, &l, size.z))
+                .unwrap();
+        } else {
+            add_box(&mut w, c, rot, size);
+        }
         placed.push((c, r));
     }
     (w, placed)
@@ -750,14 +898,14 @@ fn assert_agrees(s: &Scene, v: &View, what: &str) -> Verdict {
 
 /// Four worlds by default; `ORACLE_SEEDS=200 cargo test --test hidden_lines` tries more.
 #[test]
-fn random_boxes_agree_with_a_supersampled_depth_buffer() {
+fn random_solids_agree_with_a_supersampled_depth_buffer() {
     let seeds: u64 = std::env::var("ORACLE_SEEDS")
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(4);
     let mut checked = 0;
     for seed in 1..=seeds {
-        let (w, keep_out) = random_boxes(40, seed);
+        let (w, keep_out) = random_solids(40, seed);
         let s = Scene::build(&w);
         let mut rng = SplitMix64::new(seed ^ 0xabcdef);
         for (i, v) in random_views(&mut rng, 3, &keep_out, 240, 180)
@@ -787,9 +935,35 @@ fn block_worlds_agree_with_a_supersampled_depth_buffer() {
     }
 }
 
+/// Boxes that touch: towers of unit cubes on a grid, each cube on the one below and
+/// against its neighbours, so faces meet in a plane, edges coincide and corners meet.
+#[test]
+fn touching_boxes_agree_with_a_supersampled_depth_buffer() {
+    let mut w = World::new();
+    let mut keep_out = Vec::new();
+    let mut rng = SplitMix64::new(17);
+    for i in 0..4 {
+        for j in 0..4 {
+            let height = 1 + rng.next_u64() % 3;
+            for k in 0..height {
+                let c = DVec3::new(i as f64 - 1.5, j as f64 - 1.5, k as f64 + 0.5);
+                add_box(&mut w, c, DQuat::IDENTITY, DVec3::ONE);
+                keep_out.push((c, 0.9));
+            }
+        }
+    }
+    let s = Scene::build(&w);
+    for (i, v) in random_views(&mut rng, 6, &keep_out, 240, 180)
+        .iter()
+        .enumerate()
+    {
+        assert_agrees(&s, v, &format!("touching boxes camera {i}"));
+    }
+}
+
 #[test]
 fn the_oracle_rejects_wrong_drawings() {
-    let (w, keep_out) = random_boxes(40, 11);
+    let (w, keep_out) = random_solids(40, 11);
     let s = Scene::build(&w);
     let mut rng = SplitMix64::new(99);
     let v = random_views(&mut rng, 1, &keep_out, 240, 180)[0];

@@ -22,7 +22,9 @@
 //!   the opposite sign to the eye's, beyond a small relative tolerance) and (b) the ray
 //!   from the eye through it passes inside the face's polygon. Both conditions change
 //!   only at parameters that are exact roots of linear functions of τ: the plane's signed
-//!   distance, and the planes through the eye and each side of the polygon. Between
+//!   distance, and the planes through the eye and each side of the polygon. For a convex
+//!   polygon (every corner on the inner side of every side's eye plane) the inside is
+//!   where all the side functions are negative, one interval. Otherwise, between
 //!   consecutive roots nothing changes, so each sub-interval is classified once, at its
 //!   midpoint, by the even-odd rule in the image (which holds for concave faces and for
 //!   perimeters that run along a bridge edge twice). No perspective division enters the
@@ -35,12 +37,15 @@
 //! # Acceleration
 //!
 //! Each front face's clipped polygon is projected once and its bounding box entered in
-//! a uniform grid over the image, each cell listing its faces nearest first. A segment
-//! visits only the cells it crosses, and in each only the faces whose nearest point is
-//! nearer than the segment's farthest point (a face wholly beyond the segment cannot hide
-//! it); it stops as soon as it is wholly hidden. Edges run in parallel (rayon).
+//! a uniform grid over the image, each cell listing its faces nearest first (with a copy
+//! of the box, so passing a face over reads only the cell). A segment visits only the
+//! cells it crosses, and in each only the faces whose nearest point is nearer than the
+//! segment's farthest point (a face wholly beyond the segment cannot hide it) and whose
+//! box meets the segment's line; it stops as soon as it is wholly hidden. Faces and edges
+//! are prepared and processed in parallel runs (rayon).
 
 use std::fmt::Write as _;
+use std::ops::Range;
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -57,10 +62,19 @@ use crate::model::BodyId;
 pub const MIN_PIECE: f64 = 1e-9;
 
 /// Relative tolerance of "strictly behind a face's plane": a point must lie behind it by
-/// more than this times (its distance from the eye + the plane's distance from the eye),
-/// so edges lying in a face's plane (touching bodies, a face's own corners) are not hidden
-/// by it.
+/// more than this times (the farthest distance of its segment from the eye + the plane's
+/// distance from the eye), so edges lying in a face's plane (touching bodies, a face's own
+/// corners) are not hidden by it.
 const PLANE_TOL: f64 = 1e-9;
+
+/// Polygons with more corners than this are treated as concave (the convexity test is
+/// quadratic in the corners).
+const MAX_CONVEX_TEST: usize = 16;
+
+/// Relative tolerance of the convexity test: a corner may lie this far (relative to the
+/// lengths involved) outside a side's eye plane. Corners that far out are rounding in
+/// a planar face, and the error they cause is of the same order.
+const CONVEX_TOL: f64 = 1e-10;
 
 /// One visible piece of an edge, in pixel coordinates.
 ///
@@ -96,9 +110,9 @@ fn body_number<S: Serializer>(id: &BodyId, s: S) -> Result<S::Ok, S::Error> {
 /// Postconditions: every segment is a visible piece of one edge with finite ends inside
 /// the image window `[0, width] × [0, height]` (up to rounding) and depths ≥ the near
 /// distance; pieces of one edge do not overlap; the order is deterministic: by body (id
-/// order), then edge serial, then along the edge from NVT to PVT. A camera inside a body,
-/// or with everything behind it, gives the (possibly empty) drawing of what remains in
-/// front of the near plane.
+/// order), then edge serial, then along the edge from NVT to PVT. Nothing panics for any
+/// scene and view: a camera inside a body sees all its faces from behind, so that body
+/// neither shows nor hides anything; a scene wholly behind the camera gives no segments.
 pub fn hidden_lines(scene: &Scene, view: &View) -> Vec<Segment> {
     let eye = view.eye();
     let cam: Vec<DVec3> = scene
@@ -123,10 +137,14 @@ pub fn hidden_lines(scene: &Scene, view: &View) -> Vec<Segment> {
                 || front.get(f[1] as usize).copied().unwrap_or(false)
         })
         .collect();
-    candidates.sort_unstable_by_key(|&e| {
-        let edge = &scene.edges[e as usize];
+    let key = |e: &u32| {
+        let edge = &scene.edges[*e as usize];
         (edge.body, edge.serial)
-    });
+    };
+    // Usually already in order (edge slots are numbered in creation order).
+    if !candidates.is_sorted_by_key(key) {
+        candidates.sort_unstable_by_key(key);
+    }
 
     let ctx = Context {
         scene,
@@ -135,15 +153,27 @@ pub fn hidden_lines(scene: &Scene, view: &View) -> Vec<Segment> {
         occ: &occluders,
         grid: &grid,
     };
-    let pieces: Vec<Vec<Segment>> = candidates
-        .par_iter()
-        .with_min_len(64)
+    // Runs of edges in parallel, each into a vector of its own, joined in order.
+    const RUN: usize = 256;
+    let pieces: Vec<Vec<Segment>> = (0..candidates.len().div_ceil(RUN))
+        .into_par_iter()
         .map_init(
             || Scratch::new(occluders.list.len()),
-            |scratch, &e| ctx.edge(e as usize, scratch),
+            |scratch, k| {
+                let run = &candidates[k * RUN..((k + 1) * RUN).min(candidates.len())];
+                let mut out = Vec::with_capacity(run.len());
+                for &e in run {
+                    ctx.edge(e as usize, scratch, &mut out);
+                }
+                out
+            },
         )
         .collect();
-    pieces.into_iter().flatten().collect()
+    let mut segments = Vec::with_capacity(pieces.iter().map(Vec::len).sum());
+    for p in pieces {
+        segments.extend(p);
+    }
+    segments
 }
 
 /// The segments drawn as anti-aliased lines ([`draw_line`]) in `ink` on a `width ×
@@ -202,18 +232,35 @@ pub fn to_svg(segments: &[Segment], width: u32, height: u32) -> String {
     out
 }
 
-/// Writes `v` to a thousandth, without trailing zeros ("12.5", "3", "-0.125").
+/// Writes `v` to a thousandth, without trailing zeros ("12.5", "3", "-0.125"), through
+/// integer formatting (float formatting is several times slower).
 fn number(out: &mut String, v: f64) {
-    let start = out.len();
-    let _ = write!(out, "{v:.3}");
-    let trimmed = out[start..]
-        .trim_end_matches('0')
-        .trim_end_matches('.')
-        .len();
-    out.truncate(start + trimmed);
-    if &out[start..] == "-0" {
-        out.truncate(start);
-        out.push('0');
+    let milli = (v * 1000.0).round();
+    if milli.is_nan() || milli.abs() >= 1e15 {
+        // Beyond any image (or not finite): plain formatting.
+        let _ = write!(out, "{v}");
+        return;
+    }
+    let milli = milli as i64;
+    if milli < 0 {
+        out.push('-');
+    }
+    let m = milli.unsigned_abs();
+    let (whole, frac) = (m / 1000, m % 1000);
+    let _ = write!(out, "{whole}");
+    if frac != 0 {
+        out.push('.');
+        let digits = [frac / 100, frac / 10 % 10, frac % 10];
+        let n = if frac % 100 == 0 {
+            1
+        } else if frac % 10 == 0 {
+            2
+        } else {
+            3
+        };
+        for d in &digits[..n] {
+            out.push(char::from(b'0' + *d as u8));
+        }
     }
 }
 
@@ -235,6 +282,10 @@ struct Occluder {
     start: u32,
     /// Its number of corners (≥ 3).
     len: u32,
+    /// Whether the polygon is convex as seen from the eye (every corner on the inner
+    /// side of every side's eye plane), so that its inside along a segment is a single
+    /// interval.
+    convex: bool,
 }
 
 /// All occluders, nearest first (by `min_depth`, then face index).
@@ -249,84 +300,134 @@ struct Occluders {
 
 impl Occluders {
     fn build(scene: &Scene, view: &View, cam: &[DVec3], front: &[bool]) -> Occluders {
-        type Built = (Occluder, Vec<DVec3>, Vec<DVec2>);
-        let mut built: Vec<Built> = scene
-            .faces
-            .par_iter()
-            .enumerate()
-            .with_min_len(256)
-            .filter(|(i, _)| front[*i])
-            .map_init(Vec::new, |clipped, (i, f)| {
-                let ring = scene.ring(f);
-                if ring.len() < 3 {
-                    return None;
-                }
-                let corners: Vec<DVec3> = ring.iter().map(|&v| cam[v as usize]).collect();
-                let normal = view.direction_to_camera(f.normal);
-                let centroid = corners.iter().sum::<DVec3>() / corners.len() as f64;
-                let offset = normal.dot(centroid);
-                view.clip_polygon_near(&corners, clipped);
-                if clipped.len() < 3 {
-                    return None;
-                }
-                let n = clipped.len();
-                let sides: Vec<DVec3> = (0..n)
-                    .map(|k| clipped[k].cross(clipped[(k + 1) % n]))
-                    .collect();
-                let poly: Vec<DVec2> = clipped.iter().map(|&c| view.project(c)).collect();
-                let min_depth = clipped.iter().map(|c| -c.z).fold(f64::INFINITY, f64::min);
-                let mut bbox = [
-                    f64::INFINITY,
-                    f64::INFINITY,
-                    f64::NEG_INFINITY,
-                    f64::NEG_INFINITY,
-                ];
-                for q in &poly {
-                    bbox = [
-                        bbox[0].min(q.x),
-                        bbox[1].min(q.y),
-                        bbox[2].max(q.x),
-                        bbox[3].max(q.y),
-                    ];
-                }
-                let finite = bbox.iter().all(|x| x.is_finite())
-                    && normal.is_finite()
-                    && offset.is_finite()
-                    && sides.iter().all(|s| s.is_finite());
-                finite.then(|| {
-                    let occ = Occluder {
-                        face: i as u32,
-                        normal,
-                        offset,
-                        min_depth,
-                        bbox,
-                        start: 0,
-                        len: n as u32,
-                    };
-                    (occ, sides, poly)
-                })
-            })
-            .flatten()
-            .collect();
-        built.sort_unstable_by(|x, y| {
-            x.0.min_depth
-                .total_cmp(&y.0.min_depth)
-                .then(x.0.face.cmp(&y.0.face))
+        // Runs of faces in parallel, each into flat arrays of its own, then joined.
+        let parts = chunked(scene.faces.len(), 512, |faces| {
+            let mut part = Occluders {
+                list: Vec::new(),
+                sides: Vec::new(),
+                poly: Vec::new(),
+            };
+            let (mut corners, mut clipped) = (Vec::new(), Vec::new());
+            for i in faces.filter(|&i| front[i]) {
+                part.add(scene, view, cam, i, &mut corners, &mut clipped);
+            }
+            part
         });
-        let corners: usize = built.iter().map(|b| b.1.len()).sum();
+        let total = |f: fn(&Occluders) -> usize| parts.iter().map(f).sum::<usize>();
         let mut out = Occluders {
-            list: Vec::with_capacity(built.len()),
-            sides: Vec::with_capacity(corners),
-            poly: Vec::with_capacity(corners),
+            list: Vec::with_capacity(total(|p| p.list.len())),
+            sides: Vec::with_capacity(total(|p| p.sides.len())),
+            poly: Vec::with_capacity(total(|p| p.poly.len())),
         };
-        for (mut occ, sides, poly) in built {
-            occ.start = out.sides.len() as u32;
-            out.sides.extend(sides);
-            out.poly.extend(poly);
-            out.list.push(occ);
+        for part in parts {
+            let shift = out.sides.len() as u32;
+            out.list.extend(part.list.into_iter().map(|o| Occluder {
+                start: o.start + shift,
+                ..o
+            }));
+            out.sides.extend(part.sides);
+            out.poly.extend(part.poly);
         }
+        // Nearest first; depths are positive, so their bits sort like them.
+        let mut keys: Vec<(u64, u32, u32)> = out
+            .list
+            .iter()
+            .enumerate()
+            .map(|(k, o)| (o.min_depth.to_bits(), o.face, k as u32))
+            .collect();
+        keys.sort_unstable();
+        out.list = keys
+            .iter()
+            .map(|k| out.list[k.2 as usize].clone())
+            .collect();
         out
     }
+
+    /// Prepares front face `i` (if it keeps a polygon beyond the near plane) and appends
+    /// it. `corners` and `clipped` are working storage.
+    fn add(
+        &mut self,
+        scene: &Scene,
+        view: &View,
+        cam: &[DVec3],
+        i: usize,
+        corners: &mut Vec<DVec3>,
+        clipped: &mut Vec<DVec3>,
+    ) {
+        let f = &scene.faces[i];
+        let ring = scene.ring(f);
+        if ring.len() < 3 {
+            return;
+        }
+        corners.clear();
+        corners.extend(ring.iter().map(|&v| cam[v as usize]));
+        let normal = view.direction_to_camera(f.normal);
+        let centroid = corners.iter().sum::<DVec3>() / corners.len() as f64;
+        let offset = normal.dot(centroid);
+        view.clip_polygon_near(corners, clipped);
+        let n = clipped.len();
+        if n < 3 || !normal.is_finite() || !offset.is_finite() {
+            return;
+        }
+        let start = self.sides.len();
+        let mut bbox = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let mut min_depth = f64::INFINITY;
+        for k in 0..n {
+            let c = clipped[k];
+            let side = c.cross(clipped[(k + 1) % n]);
+            let q = view.project(c);
+            bbox = [
+                bbox[0].min(q.x),
+                bbox[1].min(q.y),
+                bbox[2].max(q.x),
+                bbox[3].max(q.y),
+            ];
+            min_depth = min_depth.min(-c.z);
+            self.sides.push(side);
+            self.poly.push(q);
+        }
+        let sides = &self.sides[start..];
+        let finite = bbox.iter().all(|x| x.is_finite()) && sides.iter().all(|s| s.is_finite());
+        if !finite {
+            self.sides.truncate(start);
+            self.poly.truncate(start);
+            return;
+        }
+        let convex = n <= MAX_CONVEX_TEST
+            && sides.iter().all(|m| {
+                clipped.iter().all(|c| {
+                    let g = m.dot(*c);
+                    g <= 0.0
+                        || g * g
+                            <= CONVEX_TOL * CONVEX_TOL * m.length_squared() * c.length_squared()
+                })
+            });
+        self.list.push(Occluder {
+            face: i as u32,
+            normal,
+            offset,
+            min_depth,
+            bbox,
+            start: start as u32,
+            len: n as u32,
+            convex,
+        });
+    }
+}
+
+/// `f` over consecutive runs of `0..n` of about `run` items, in parallel; the results in
+/// order.
+fn chunked<T: Send>(n: usize, run: usize, f: impl Fn(Range<usize>) -> T + Sync) -> Vec<T> {
+    let runs = n.div_ceil(run.max(1));
+    (0..runs)
+        .into_par_iter()
+        .map(|k| f(k * run..((k + 1) * run).min(n)))
+        .collect()
 }
 
 /// A uniform grid of square cells over the image window; each cell lists (indices into
@@ -342,7 +443,44 @@ struct Grid {
     height: f64,
     /// Cell `c` lists `items[start[c]..start[c + 1]]`.
     start: Vec<u32>,
-    items: Vec<u32>,
+    items: Vec<Item>,
+}
+
+/// An occluder's entry in a grid cell: what is needed to pass it over without reading
+/// the occluder itself.
+#[derive(Clone, Copy, Debug, Default)]
+struct Item {
+    /// The occluder's `min_depth`.
+    depth: f64,
+    /// Its bounding box, clamped to the window widened by a pixel, then widened by
+    /// [`Item::PAD`] and rounded to `f32` (so it still contains the polygon).
+    bbox: [f32; 4],
+    /// Index into [`Occluders::list`].
+    occ: u32,
+    /// Its face (index into [`Scene::faces`]).
+    face: u32,
+}
+
+impl Item {
+    /// Widening before rounding to `f32`: more than half a unit in the last place of any
+    /// coordinate up to the largest image side plus a pixel.
+    const PAD: f64 = 0.05;
+
+    fn new(i: usize, o: &Occluder, width: f64, height: f64) -> Item {
+        let b = o.bbox;
+        let clamp = |x: f64, hi: f64| x.clamp(-1.0, hi + 1.0);
+        Item {
+            depth: o.min_depth,
+            bbox: [
+                (clamp(b[0], width) - Item::PAD) as f32,
+                (clamp(b[1], height) - Item::PAD) as f32,
+                (clamp(b[2], width) + Item::PAD) as f32,
+                (clamp(b[3], height) + Item::PAD) as f32,
+            ],
+            occ: i as u32,
+            face: o.face,
+        }
+    }
 }
 
 impl Grid {
@@ -380,13 +518,14 @@ impl Grid {
             grid.start[c + 1] += grid.start[c];
         }
         let mut fill = grid.start.clone();
-        grid.items = vec![0; grid.start[nx * ny] as usize];
+        grid.items = vec![Item::default(); grid.start[nx * ny] as usize];
         for (i, r) in ranges.iter().enumerate() {
             let Some(r) = r else { continue };
+            let item = Item::new(i, &occ.list[i], width, height);
             for y in r[1]..=r[3] {
                 for x in r[0]..=r[2] {
                     let c = y * nx + x;
-                    grid.items[fill[c] as usize] = i as u32;
+                    grid.items[fill[c] as usize] = item;
                     fill[c] += 1;
                 }
             }
@@ -401,8 +540,9 @@ impl Grid {
         if b[2] < -PAD || b[3] < -PAD || b[0] > self.width + PAD || b[1] > self.height + PAD {
             return None;
         }
-        let col = |u: f64| ((u / self.cell).floor().max(0.0) as usize).min(self.nx - 1);
-        let row = |v: f64| ((v / self.cell).floor().max(0.0) as usize).min(self.ny - 1);
+        // For x ≥ 0, `x as usize` is ⌊x⌋ (and the cast saturates).
+        let col = |u: f64| (((u / self.cell).max(0.0)) as usize).min(self.nx - 1);
+        let row = |v: f64| (((v / self.cell).max(0.0)) as usize).min(self.ny - 1);
         Some([
             col(b[0] - PAD),
             row(b[1] - PAD),
@@ -417,7 +557,8 @@ impl Grid {
     fn walk(&self, p: DVec2, q: DVec2, mut visit: impl FnMut(usize) -> bool) -> bool {
         const PAD: f64 = 1e-6;
         let d = q - p;
-        // Work along the major axis: `major` picks a point's coordinate along it.
+        // Work along the major axis: index `along` picks a point's coordinate along it,
+        // `across` the other one.
         let steep = d.y.abs() > d.x.abs();
         let (along, across) = if steep { (1, 0) } else { (0, 1) };
         let (n_along, n_across) = if steep {
@@ -427,8 +568,8 @@ impl Grid {
         };
         let (p0, p1) = (p[along], q[along]);
         let (lo, hi) = (p0.min(p1), p0.max(p1));
-        let index =
-            |x: f64, n: usize| ((x / self.cell).floor().max(0.0) as usize).min(n.max(1) - 1);
+        // For x ≥ 0, `x as usize` is ⌊x⌋ (and the cast saturates).
+        let index = |x: f64, n: usize| (((x / self.cell).max(0.0)) as usize).min(n.max(1) - 1);
         let (c0, c1) = (index(lo - PAD, n_along), index(hi + PAD, n_along));
         let slope = if p1 != p0 {
             (q[across] - p[across]) / (p1 - p0)
@@ -563,17 +704,17 @@ impl Piece {
 }
 
 impl Context<'_> {
-    /// The visible pieces of scene edge `e`, along the edge.
-    fn edge(&self, e: usize, scratch: &mut Scratch) -> Vec<Segment> {
+    /// Appends the visible pieces of scene edge `e` to `out`, along the edge.
+    fn edge(&self, e: usize, scratch: &mut Scratch, out: &mut Vec<Segment>) {
         let edge = &self.scene.edges[e];
         let (Some(&ca), Some(&cb)) = (
             self.cam.get(edge.ends[0] as usize),
             self.cam.get(edge.ends[1] as usize),
         ) else {
-            return Vec::new();
+            return;
         };
         let Some((t0, t1)) = self.view.clip_segment(ca, cb) else {
-            return Vec::new();
+            return;
         };
         let a = if t0 > 0.0 { ca.lerp(cb, t0) } else { ca };
         let b = if t1 < 1.0 { ca.lerp(cb, t1) } else { cb };
@@ -584,13 +725,17 @@ impl Context<'_> {
             scale: a.length().max(b.length()),
         };
         if !at_least(piece.d.length(), MIN_PIECE * piece.scale) {
-            return Vec::new();
+            return;
         }
         let (pa, pb) = (self.view.project(a), self.view.project(b));
         let far = (-a.z).max(-b.z);
         let lo = pa.min(pb);
         let hi = pa.max(pb);
         let own = edge.faces;
+        // The segment's line: n·x = c; a box is off it when its extent along n misses c.
+        let n = (pb - pa).perp();
+        let c = n.dot(pa);
+        let slack = 1e-3 * n.abs().element_sum();
 
         scratch.hidden.clear();
         let stamp = scratch.next_stamp();
@@ -603,25 +748,31 @@ impl Context<'_> {
         let whole = self.grid.walk(pa, pb, |cell| {
             let items = &self.grid.items
                 [self.grid.start[cell] as usize..self.grid.start[cell + 1] as usize];
-            for &o in items {
-                let occ = &self.occ.list[o as usize];
-                if occ.min_depth >= far {
+            for item in items {
+                if item.depth >= far {
                     break;
                 }
-                if seen[o as usize] == stamp {
-                    continue;
-                }
-                seen[o as usize] = stamp;
-                if occ.face == own[0]
-                    || occ.face == own[1]
-                    || occ.bbox[0] > hi.x
-                    || occ.bbox[2] < lo.x
-                    || occ.bbox[1] > hi.y
-                    || occ.bbox[3] < lo.y
+                let [x0, y0, x1, y1] = item.bbox.map(f64::from);
+                if x0 > hi.x
+                    || x1 < lo.x
+                    || y0 > hi.y
+                    || y1 < lo.y
+                    || item.face == own[0]
+                    || item.face == own[1]
                 {
                     continue;
                 }
-                self.hide(&piece, occ, hidden, breaks);
+                let centre = n.x * (x0 + x1) + n.y * (y0 + y1);
+                let reach = n.x.abs() * (x1 - x0) + n.y.abs() * (y1 - y0);
+                if (centre - 2.0 * c).abs() > reach + 2.0 * slack {
+                    continue;
+                }
+                let o = item.occ as usize;
+                if seen[o] == stamp {
+                    continue;
+                }
+                seen[o] = stamp;
+                self.hide(&piece, &self.occ.list[o], hidden, breaks);
                 if let [(h0, h1)] = hidden[..]
                     && h0 <= MIN_PIECE
                     && h1 >= 1.0 - MIN_PIECE
@@ -632,11 +783,10 @@ impl Context<'_> {
             true
         });
         if !whole {
-            return Vec::new();
+            return;
         }
 
         // The complement of the hidden intervals in [0, 1].
-        let mut out = Vec::new();
         let mut from = 0.0;
         let mut push = |t0: f64, t1: f64| {
             if t1 - t0 >= MIN_PIECE {
@@ -655,7 +805,6 @@ impl Context<'_> {
             from = h1;
         }
         push(from, 1.0);
-        out
     }
 
     /// Adds to `hidden` the parameters of `piece` that `occ` hides.
@@ -688,9 +837,37 @@ impl Context<'_> {
         if !at_least(hi - lo, MIN_PIECE) {
             return;
         }
+        let range = occ.start as usize..(occ.start + occ.len) as usize;
+        if occ.convex {
+            // (b) for a convex polygon: inside every side's eye plane, g(τ) = m·p(τ) < 0
+            // (corners have m·c ≤ 0 and the eye plane's normal points out), an interval.
+            for m in &self.occ.sides[range] {
+                if *m == DVec3::ZERO {
+                    continue;
+                }
+                let (ga, gb) = (m.dot(piece.a), m.dot(piece.b));
+                let dg = gb - ga;
+                if dg == 0.0 {
+                    if ga.is_nan() || ga >= 0.0 {
+                        return;
+                    }
+                } else {
+                    let t = ga / (ga - gb);
+                    if dg > 0.0 {
+                        hi = hi.min(t);
+                    } else {
+                        lo = lo.max(t);
+                    }
+                }
+                if !at_least(hi - lo, MIN_PIECE) {
+                    return;
+                }
+            }
+            add_interval(hidden, lo, hi);
+            return;
+        }
         // (b) Inside the polygon as seen from the eye: may change only where the segment
         // crosses a plane through the eye and a side of the polygon.
-        let range = occ.start as usize..(occ.start + occ.len) as usize;
         breaks.clear();
         breaks.push(lo);
         for m in &self.occ.sides[range.clone()] {
@@ -754,11 +931,11 @@ mod tests {
     #[test]
     fn numbers_are_short() {
         let mut s = String::new();
-        for v in [12.5, 3.0, -0.125, -0.0001, 1.23456] {
+        for v in [12.5, 3.0, -0.125, -0.0001, 1.23456, 1_279.999_9, 0.05, -7.0] {
             number(&mut s, v);
             s.push(' ');
         }
-        assert_eq!(s, "12.5 3 -0.125 0 1.235 ");
+        assert_eq!(s, "12.5 3 -0.125 0 1.235 1280 0.05 -7 ");
     }
 
     #[test]
