@@ -248,8 +248,10 @@ fn cameras_inside_or_facing_away_draw_correct_images() {
 
 #[test]
 fn bad_requests_are_problems_and_change_nothing() {
-    let mut limits = winged::server::Limits::default();
-    limits.max_render_pixels = 1_000_000;
+    let limits = winged::server::Limits {
+        max_render_pixels: 1_000_000,
+        ..winged::server::Limits::default()
+    };
     let s = TestServer::with_limits(cube_world(), limits);
     let before = revision(&s);
     let problems: Vec<(&str, u16)> = vec![

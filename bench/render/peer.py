@@ -9,7 +9,6 @@ Prints p50 / p99 per scene in milliseconds, in the same table layout as the Rust
     LIBGL_ALWAYS_SOFTWARE=1 GALLIUM_DRIVER=llvmpipe python peer.py DIR
 """
 
-import struct
 import sys
 import time
 from pathlib import Path
@@ -57,7 +56,7 @@ def read_scene(path):
 
     def take(fmt, count=1):
         nonlocal at
-        size = struct.calcsize(fmt) * count
+        size = np.dtype(fmt).itemsize * count
         arr = np.frombuffer(data, dtype=np.dtype(fmt), count=count, offset=at)
         at += size
         return arr

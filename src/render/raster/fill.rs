@@ -292,7 +292,7 @@ pub(super) fn fill<S: Sink>(band: &mut Band<S>, v: [[f64; 2]; 3], plane: [f64; 3
                 xr = -1.0;
             }
         }
-        if !(xl <= xr) {
+        if xl.partial_cmp(&xr).is_none_or(|o| o.is_gt()) {
             continue;
         }
         let (xs, xe) = (xl as usize, xr as usize);

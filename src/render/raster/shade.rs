@@ -275,7 +275,7 @@ impl Lamp {
             } => {
                 let d = *position - p;
                 let d2 = d.length_squared();
-                if !(d2 > 0.0) {
+                if d2.partial_cmp(&0.0).is_none_or(|o| o.is_le()) {
                     return 0.0;
                 }
                 let nl = n.dot(d) / d2.sqrt();
@@ -411,7 +411,7 @@ impl Projection for Ortho {
     /// those within 1e-6 of edge-on, which cover next to nothing.
     fn plane(&self, f: &SceneFace) -> Option<[f64; 3]> {
         let nw = f.normal.dot(self.w);
-        if !(nw > 1e-6) {
+        if nw.partial_cmp(&1e-6).is_none_or(|o| o.is_le()) {
             return None;
         }
         let (ns, nt) = (f.normal.dot(self.s), f.normal.dot(self.t));
@@ -581,7 +581,7 @@ impl CubeMap {
         let view = &self.views[f];
         let c = view.to_camera(p);
         let depth = -c.z;
-        if !(depth > 0.0) {
+        if depth.partial_cmp(&0.0).is_none_or(|o| o.is_le()) {
             return true;
         }
         let uv = view.project(c);
@@ -589,7 +589,7 @@ impl CubeMap {
         let x = uv.x.floor().max(0.0).min(last) as usize;
         let y = uv.y.floor().max(0.0).min(last) as usize;
         let k = self.keys[f][y * self.side + x] as f64;
-        if !(k > 0.0) {
+        if k.partial_cmp(&0.0).is_none_or(|o| o.is_le()) {
             return true;
         }
         let texel = depth * 2.0 / self.side as f64;
