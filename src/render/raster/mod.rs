@@ -30,7 +30,7 @@ use crate::model::BodyId;
 use super::image::{Gray16, RgbImage};
 use super::lines::draw_line;
 use super::scene::Scene;
-use fill::{Band, Ids, Perspective};
+use fill::{Band, Ids, Perspective, Projection, Scratch};
 
 pub use shade::{Shading, shaded};
 
@@ -75,54 +75,81 @@ impl Frame {
 /// infinity. Never panics: a camera inside a body or facing away from everything gives an
 /// empty frame, and a zero-sized image an empty one.
 pub fn rasterize(scene: &Scene, view: &View) -> Frame {
-    rasterize_with_planes(scene, view).0
+    rasterize_with(scene, view, &mut Scratch::default(), |_, _, _| ()).0
 }
 
-/// [`rasterize`], also returning each face's key plane (1/depth as an affine function of
-/// pixel coordinates; NaN for culled faces) for callers that need exact depths.
-fn rasterize_with_planes(scene: &Scene, view: &View) -> (Frame, Vec<[f64; 3]>) {
+/// [`rasterize`] with working memory `scratch`, also handing each finished band of rows
+/// (first row, depths, faces — as in the frame) to `per_band` while it is in the cache,
+/// and returning what it returns, band by band.
+fn rasterize_with<R, G>(
+    scene: &Scene,
+    view: &View,
+    scratch: &mut Scratch,
+    per_band: G,
+) -> (Frame, Vec<R>)
+where
+    G: Fn(usize, &[f32], &[u32]) -> R + Sync,
+    R: Send,
+{
     let (width, height) = view.size();
     let (w, h) = (width as usize, height as usize);
+    // Both buffers are cleared band by band in the drawing threads; faces are stored plus
+    // one (0 for none) until each band is finished.
     let mut key = vec![0.0f32; w * h];
-    let mut face = vec![NO_FACE; w * h];
+    let mut face = vec![0u32; w * h];
     let proj = Perspective {
         view: *view,
         front: true,
     };
-    let planes = fill::draw(scene, &proj, w, h, |rows| {
-        fill::split_rows(&mut key, w, rows)
-            .into_iter()
-            .zip(fill::split_rows(&mut face, w, rows))
-            .map(|((y0, key), (_, face))| Band {
-                y0,
-                rows: key.len() / w.max(1),
-                width: w,
-                sink: Ids { key, face },
-            })
-            .collect()
-    });
-    // Keys to depths: the exact depth from the face's plane at each pixel centre.
-    key.par_chunks_mut(w.max(1))
-        .zip(face.par_chunks(w.max(1)))
-        .enumerate()
-        .for_each(|(y, (depth, faces))| {
-            let py = y as f64 + 0.5;
-            for (x, (d, &f)) in depth.iter_mut().zip(faces).enumerate() {
-                *d = if f == NO_FACE {
-                    f32::INFINITY
-                } else {
-                    let [a, b, c] = planes[f as usize];
-                    (1.0 / (a * (x as f64 + 0.5) + b * py + c)) as f32
-                };
+    let results = fill::draw(
+        scene,
+        &proj,
+        w,
+        h,
+        scratch,
+        |rows| {
+            fill::split_rows(&mut key, w, rows)
+                .into_iter()
+                .zip(fill::split_rows(&mut face, w, rows))
+                .map(|((y0, key), (_, face))| Band {
+                    y0,
+                    rows: key.len() / w.max(1),
+                    width: w,
+                    sink: Ids { key, face },
+                })
+                .collect()
+        },
+        |band| {
+            // Keys to depths: the exact depth from the face's plane at each pixel centre.
+            let Ids { key, face } = &mut band.sink;
+            for (r, (depth, faces)) in key.chunks_mut(w).zip(face.chunks_mut(w)).enumerate() {
+                let py = (band.y0 + r) as f64 + 0.5;
+                let (mut last, mut plane) = (0, [0.0; 3]);
+                for (x, (d, f)) in depth.iter_mut().zip(faces).enumerate() {
+                    if *f == 0 {
+                        *f = NO_FACE;
+                        *d = f32::INFINITY;
+                        continue;
+                    }
+                    if *f != last {
+                        last = *f;
+                        plane = proj.plane(&scene.faces[*f as usize - 1]);
+                    }
+                    *f -= 1;
+                    let [a, b, c] = plane;
+                    *d = (1.0 / (a * (x as f64 + 0.5) + b * py + c)) as f32;
+                }
             }
-        });
+            per_band(band.y0, key, face)
+        },
+    );
     let frame = Frame {
         width,
         height,
         depth: key,
         face,
     };
-    (frame, planes)
+    (frame, results)
 }
 
 /// The depth image of `frame`: 0 where nothing is seen, else the depth in units of

@@ -52,8 +52,8 @@ use crate::model::{Camera, Intrinsics, Light};
 use crate::render::image::RgbImage;
 use crate::render::scene::{Scene, SceneFace};
 
-use super::fill::{self, Band, Keys, Perspective, Projection};
-use super::{NO_FACE, rasterize_with_planes};
+use super::fill::{self, Band, Keys, Perspective, Projection, Scratch};
+use super::{NO_FACE, rasterize_with};
 
 /// How [`shaded`] draws.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,9 +65,9 @@ pub struct Shading {
     /// Whether lights cast shadows (true by default).
     pub shadows: bool,
     /// Texels on the longer side of a sun's shadow map and on the side of each of a
-    /// point light's six maps; 0 (the default) chooses from the image size: 1.6 × its
-    /// longer side (between 256 and 4096) for suns, half of it (between 128 and 2048)
-    /// for point lights.
+    /// point light's six maps; 0 (the default) chooses from the image size: its longer
+    /// side (between 256 and 4096) for suns, whose maps are fitted to what the picture
+    /// shows, and half of it (between 128 and 2048) for point lights.
     pub shadow_map_size: u32,
 }
 
@@ -91,7 +91,6 @@ impl Default for Shading {
 pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
     let (width, height) = view.size();
     let (w, h) = (width as usize, height as usize);
-    let (frame, planes) = rasterize_with_planes(scene, view);
     if w == 0 || h == 0 {
         return RgbImage::filled(width, height, shading.background);
     }
@@ -123,6 +122,23 @@ pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
             },
         })
         .collect();
+    // The suns' light-space axes, for fitting their shadow maps to what the picture shows.
+    let suns: Vec<Option<Axes>> = lamps
+        .iter()
+        .map(|l| match l {
+            Lamp::Sun { toward, .. } if shading.shadows => Some(Axes::new(*toward)),
+            _ => None,
+        })
+        .collect();
+    let fit = suns.iter().any(Option::is_some);
+    let mut scratch = Scratch::default();
+    let (frame, boxes) = rasterize_with(scene, view, &mut scratch, |y0, depth, face| {
+        if fit {
+            footprints(scene, &rays, &suns, y0, w, depth, face)
+        } else {
+            Vec::new()
+        }
+    });
     if shading.shadows {
         let side = w.max(h) as f64;
         let (sun_side, cube_side) = if shading.shadow_map_size > 0 {
@@ -130,18 +146,22 @@ pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
             (s, s)
         } else {
             (
-                (1.6 * side).clamp(256.0, 4096.0) as usize,
+                side.clamp(256.0, 4096.0) as usize,
                 (0.5 * side).clamp(128.0, 2048.0) as usize,
             )
         };
-        let footprints = sun_footprints(scene, &frame.face, &planes, &rays, w, &lamps);
-        for (lamp, footprint) in lamps.iter_mut().zip(footprints) {
+        for (k, lamp) in lamps.iter_mut().enumerate() {
             match lamp {
                 Lamp::Sun { toward, map, .. } => {
-                    *map = footprint.and_then(|fp| SunMap::new(scene, -*toward, fp, sun_side));
+                    let footprint = boxes
+                        .iter()
+                        .fold(EMPTY, |a, b| b.get(k).map_or(a, |b| union(a, *b)));
+                    if footprint[0] <= footprint[1] && footprint[2] <= footprint[3] {
+                        *map = SunMap::new(scene, -*toward, footprint, sun_side, &mut scratch);
+                    }
                 }
                 Lamp::Point { position, map, .. } => {
-                    *map = CubeMap::new(scene, *position, cube_side);
+                    *map = CubeMap::new(scene, *position, cube_side, &mut scratch);
                 }
             }
         }
@@ -153,35 +173,49 @@ pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
         .collect();
     let encode = linear_to_srgb();
     let ambient = shading.ambient;
-    let mut img = RgbImage::filled(width, height, shading.background);
-    img.data
-        .par_chunks_mut(w * 3)
+    let background = shading.background;
+    // Zeros, so fresh pages are first touched by the parallel rows.
+    let mut data = vec![0u8; w * h * 3];
+    data.par_chunks_mut(w * 3)
         .zip(frame.face.par_chunks(w))
+        .zip(frame.depth.par_chunks(w))
         .enumerate()
-        .for_each(|(y, (out, faces))| {
+        .for_each(|(y, ((out, faces), depths))| {
             let py = y as f64 + 0.5;
-            for (x, &f) in faces.iter().enumerate() {
+            let mut last = NO_FACE;
+            let mut prep = vec![(0.0, 0.0); lamps.len()];
+            let (mut n, mut base) = (DVec3::ZERO, [0.0f32; 3]);
+            for (x, (&f, &depth)) in faces.iter().zip(depths).enumerate() {
+                let o = &mut out[x * 3..x * 3 + 3];
                 if f == NO_FACE {
+                    o.copy_from_slice(&background);
                     continue;
                 }
-                let face = &scene.faces[f as usize];
-                let px = x as f64 + 0.5;
-                let [a, b, c] = planes[f as usize];
-                let p = rays.point(px, py, 1.0 / (a * px + b * py + c));
-                let n = face.normal;
-                let mut light = ambient;
-                for lamp in &lamps {
-                    light += lamp.light(p, n);
+                if f != last {
+                    last = f;
+                    let face = &scene.faces[f as usize];
+                    n = face.normal;
+                    base = bases[face.body as usize];
+                    for (p, lamp) in prep.iter_mut().zip(&lamps) {
+                        *p = lamp.prepare(n);
+                    }
                 }
-                let base = bases[face.body as usize];
+                let p = rays.point(x as f64 + 0.5, py, depth as f64);
+                let mut light = ambient;
+                for (lamp, &prep) in lamps.iter().zip(&prep) {
+                    light += lamp.light(p, n, prep);
+                }
                 let l = light as f32;
-                let o = &mut out[x * 3..x * 3 + 3];
                 for k in 0..3 {
                     o[k] = encode_one(encode, base[k] * l);
                 }
             }
         });
-    img
+    RgbImage {
+        width,
+        height,
+        data,
+    }
 }
 
 /// Pixel rays of a camera in world coordinates.
@@ -252,17 +286,30 @@ enum Lamp {
 }
 
 impl Lamp {
-    /// The light this lamp gives a surface with unit normal `n` at `p`.
+    /// What a face with unit normal `n` needs of this lamp at every pixel: for a sun, the
+    /// incidence cosine and the shadow bias (meters); nothing for a point light.
     #[inline]
-    fn light(&self, p: DVec3, n: DVec3) -> f64 {
+    fn prepare(&self, n: DVec3) -> (f64, f64) {
         match self {
-            Lamp::Sun {
-                toward,
-                intensity,
-                map,
-            } => {
+            Lamp::Sun { toward, map, .. } => {
                 let nl = n.dot(*toward);
-                if nl <= 0.0 || map.as_ref().is_some_and(|m| !m.lit(p, nl)) {
+                let bias = match map {
+                    Some(m) if nl > 0.0 => m.texel * bias_texels(nl) + m.eps,
+                    _ => 0.0,
+                };
+                (nl, bias)
+            }
+            Lamp::Point { .. } => (0.0, 0.0),
+        }
+    }
+
+    /// The light this lamp gives a surface with unit normal `n` at `p`; `prep` is
+    /// [`Lamp::prepare`] of `n`.
+    #[inline]
+    fn light(&self, p: DVec3, n: DVec3, (nl, bias): (f64, f64)) -> f64 {
+        match self {
+            Lamp::Sun { intensity, map, .. } => {
+                if nl <= 0.0 || map.as_ref().is_some_and(|m| !m.lit(p, bias)) {
                     0.0
                 } else {
                     nl * intensity
@@ -297,87 +344,85 @@ fn bias_texels(nl: f64) -> f64 {
     0.75 * slope + 0.5
 }
 
-/// For each lamp that is a sun, the light-space box `[x_min, x_max, y_min, y_max]` (in
-/// its [`sun_axes`]) of the visible points it could light, or `None` (no such point, or
-/// not a sun).
-fn sun_footprints(
-    scene: &Scene,
-    faces: &[u32],
-    planes: &[[f64; 3]],
-    rays: &Rays,
-    width: usize,
-    lamps: &[Lamp],
-) -> Vec<Option<[f64; 4]>> {
-    let suns: Vec<Option<(DVec3, DVec3, DVec3)>> = lamps
-        .iter()
-        .map(|l| match l {
-            Lamp::Sun { toward, .. } => {
-                let (s, t) = sun_axes(-*toward);
-                Some((*toward, s, t))
-            }
-            Lamp::Point { .. } => None,
-        })
-        .collect();
-    if suns.iter().all(Option::is_none) {
-        return vec![None; lamps.len()];
+/// A sun's light-space frame: unit `toward` the sun and axes `s`, `t` across its rays
+/// ([`sun_axes`]).
+#[derive(Clone, Copy, Debug)]
+struct Axes {
+    toward: DVec3,
+    s: DVec3,
+    t: DVec3,
+}
+
+impl Axes {
+    fn new(toward: DVec3) -> Axes {
+        let (s, t) = sun_axes(-toward);
+        Axes { toward, s, t }
     }
-    let empty = [
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    let boxes = faces
-        .par_chunks(width)
-        .enumerate()
-        .fold(
-            || vec![empty; suns.len()],
-            |mut acc, (y, row)| {
-                let py = y as f64 + 0.5;
-                for (x, &f) in row.iter().enumerate() {
-                    if f == NO_FACE {
-                        continue;
-                    }
-                    let face: &SceneFace = &scene.faces[f as usize];
-                    let px = x as f64 + 0.5;
-                    let [a, b, c] = planes[f as usize];
-                    let p = rays.point(px, py, 1.0 / (a * px + b * py + c));
+}
+
+/// An empty light-space box `[x_min, x_max, y_min, y_max]`.
+const EMPTY: [f64; 4] = [
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+];
+
+/// The smallest box holding boxes `a` and `b`.
+fn union(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    [
+        a[0].min(b[0]),
+        a[1].max(b[1]),
+        a[2].min(b[2]),
+        a[3].max(b[3]),
+    ]
+}
+
+/// For each of `suns` (`None` for a lamp that needs no fitting), the light-space box of
+/// the points a band of the picture shows that the sun could light (surfaces facing it):
+/// rows from `y0`, `width` pixels wide, with the frame's `depth` and `face` values.
+///
+/// Along a row, the pixels of one face show points on one straight line (the face's plane
+/// meets the plane through the eye and the row), so only the two ends of each run of a
+/// face need to be reconstructed.
+fn footprints(
+    scene: &Scene,
+    rays: &Rays,
+    suns: &[Option<Axes>],
+    y0: usize,
+    width: usize,
+    depth: &[f32],
+    face: &[u32],
+) -> Vec<[f64; 4]> {
+    let mut acc = vec![EMPTY; suns.len()];
+    for (r, (depths, faces)) in depth.chunks(width).zip(face.chunks(width)).enumerate() {
+        let py = (y0 + r) as f64 + 0.5;
+        let mut x = 0;
+        while x < faces.len() {
+            let f = faces[x];
+            let mut end = x + 1;
+            while end < faces.len() && faces[end] == f {
+                end += 1;
+            }
+            if f != NO_FACE {
+                let n = scene.faces[f as usize].normal;
+                for xs in [x, end - 1] {
+                    let p = rays.point(xs as f64 + 0.5, py, depths[xs] as f64);
                     if !p.is_finite() {
                         continue;
                     }
-                    for (k, sun) in suns.iter().enumerate() {
-                        let Some((l, s, t)) = sun else { continue };
-                        if face.normal.dot(*l) > 0.0 {
-                            let (u, v) = (s.dot(p), t.dot(p));
-                            let b = &mut acc[k];
-                            b[0] = b[0].min(u);
-                            b[1] = b[1].max(u);
-                            b[2] = b[2].min(v);
-                            b[3] = b[3].max(v);
+                    for (b, sun) in acc.iter_mut().zip(suns) {
+                        if let Some(a) = sun.filter(|a| n.dot(a.toward) > 0.0) {
+                            let (u, v) = (a.s.dot(p), a.t.dot(p));
+                            *b = union(*b, [u, u, v, v]);
                         }
                     }
                 }
-                acc
-            },
-        )
-        .reduce(
-            || vec![empty; suns.len()],
-            |mut a, b| {
-                for (x, y) in a.iter_mut().zip(b) {
-                    *x = [
-                        x[0].min(y[0]),
-                        x[1].max(y[1]),
-                        x[2].min(y[2]),
-                        x[3].max(y[3]),
-                    ];
-                }
-                a
-            },
-        );
-    boxes
-        .into_iter()
-        .map(|b| (b[0] <= b[1] && b[2] <= b[3]).then_some(b))
-        .collect()
+            }
+            x = end;
+        }
+    }
+    acc
 }
 
 /// The light-space axes (s, t) across a sun's rays travelling along unit `direction`.
@@ -386,7 +431,8 @@ fn sun_axes(direction: DVec3) -> (DVec3, DVec3) {
 }
 
 /// An orthographic view along a sun's rays: pixel (u, v) is light-space
-/// ((u/scale + x0)·s + (v/scale + y0)·t); the key is `zc − w·p` (nearer the sun larger).
+/// ((u/scale + x0)·s + (v/scale + y0)·t); the key is `zc − w·p` (nearer the sun larger,
+/// and positive for every point of the scene).
 #[derive(Clone, Copy, Debug)]
 struct Ortho {
     s: DVec3,
@@ -409,18 +455,21 @@ impl Projection for Ortho {
 
     /// Draws the faces turned away from the sun (the far sides of occluders), skipping
     /// those within 1e-6 of edge-on, which cover next to nothing.
-    fn plane(&self, f: &SceneFace) -> Option<[f64; 3]> {
+    #[inline]
+    fn draws(&self, f: &SceneFace) -> bool {
+        f.normal.dot(self.w) > 1e-6
+    }
+
+    #[inline]
+    fn plane(&self, f: &SceneFace) -> [f64; 3] {
         let nw = f.normal.dot(self.w);
-        if nw.partial_cmp(&1e-6).is_none_or(|o| o.is_le()) {
-            return None;
-        }
         let (ns, nt) = (f.normal.dot(self.s), f.normal.dot(self.t));
         // On the plane, w·p = (offset − ns·X − nt·Y)/nw with X = u/scale + x0, Y = v/scale + y0.
-        Some([
+        [
             ns / (nw * self.scale),
             nt / (nw * self.scale),
             self.zc - (f.offset - ns * self.x0 - nt * self.y0) / nw,
-        ])
+        ]
     }
 }
 
@@ -429,7 +478,7 @@ struct SunMap {
     view: Ortho,
     width: usize,
     height: usize,
-    /// Keys of the nearest far-side surface per texel; −∞ where none.
+    /// Keys of the nearest far-side surface per texel; 0 where none.
     key: Vec<f32>,
     /// Texel side, meters.
     texel: f64,
@@ -441,11 +490,19 @@ impl SunMap {
     /// The map of the sun shining along unit `direction` over the light-space box
     /// `footprint` of its receivers, `side` texels on its longer side. `None` for a scene
     /// without geometry.
-    fn new(scene: &Scene, direction: DVec3, footprint: [f64; 4], side: usize) -> Option<SunMap> {
+    fn new(
+        scene: &Scene,
+        direction: DVec3,
+        footprint: [f64; 4],
+        side: usize,
+        scratch: &mut Scratch,
+    ) -> Option<SunMap> {
         let bounds = scene.bounds?;
         let (s, t) = sun_axes(direction);
         let diag = (bounds.max - bounds.min).length();
-        let zc = direction.dot((bounds.min + bounds.max) / 2.0);
+        // Beyond the scene's far end from the sun, so that every key is positive and a
+        // texel left at zero holds nothing.
+        let zc = direction.dot((bounds.min + bounds.max) / 2.0) + 0.5 * diag + 1e-3 * diag + 1e-6;
         let side = side.max(8);
         let pad = 2.0;
         let extent = (footprint[1] - footprint[0])
@@ -466,18 +523,26 @@ impl SunMap {
             scale: 1.0 / texel,
             zc,
         };
-        let mut key = vec![f32::NEG_INFINITY; width * height];
-        fill::draw(scene, &view, width, height, |rows| {
-            fill::split_rows(&mut key, width, rows)
-                .into_iter()
-                .map(|(y0, k)| Band {
-                    y0,
-                    rows: k.len() / width,
-                    width,
-                    sink: Keys(k),
-                })
-                .collect()
-        });
+        let mut key = vec![0.0f32; width * height];
+        fill::draw(
+            scene,
+            &view,
+            width,
+            height,
+            scratch,
+            |rows| {
+                fill::split_rows(&mut key, width, rows)
+                    .into_iter()
+                    .map(|(y0, k)| Band {
+                        y0,
+                        rows: k.len() / width,
+                        width,
+                        sink: Keys(k),
+                    })
+                    .collect()
+            },
+            |_| (),
+        );
         Some(SunMap {
             view,
             width,
@@ -488,16 +553,15 @@ impl SunMap {
         })
     }
 
-    /// Whether the sun sees `p`, on a surface lit at incidence cosine `nl`.
+    /// Whether the sun sees `p`, allowing `bias` meters toward the sun.
     #[inline]
-    fn lit(&self, p: DVec3, nl: f64) -> bool {
+    fn lit(&self, p: DVec3, bias: f64) -> bool {
         let [u, v] = self.view.point(p);
         if !(u >= 0.0 && v >= 0.0 && u < self.width as f64 && v < self.height as f64) {
             return true;
         }
         let k = self.key[v as usize * self.width + u as usize] as f64;
-        let receiver = self.view.zc - self.view.w.dot(p);
-        k <= receiver + self.texel * bias_texels(nl) + self.eps
+        k <= self.view.zc - self.view.w.dot(p) + bias
     }
 }
 
@@ -516,7 +580,7 @@ struct CubeMap {
 impl CubeMap {
     /// The cube of `side`-texel maps around `position`. `None` for a scene without
     /// geometry or a light whose views cannot be made (a non-finite position).
-    fn new(scene: &Scene, position: DVec3, side: usize) -> Option<CubeMap> {
+    fn new(scene: &Scene, position: DVec3, side: usize, scratch: &mut Scratch) -> Option<CubeMap> {
         let bounds = scene.bounds?;
         let side = side.clamp(2, crate::model::camera::MAX_IMAGE_SIDE as usize);
         let k = Intrinsics::centered(side as u32, side as u32, side as f64 / 2.0).ok()?;
@@ -541,17 +605,25 @@ impl CubeMap {
                     view: *view,
                     front: false,
                 };
-                fill::draw(scene, &proj, side, side, |rows| {
-                    fill::split_rows(&mut key, side, rows)
-                        .into_iter()
-                        .map(|(y0, k)| Band {
-                            y0,
-                            rows: k.len() / side,
-                            width: side,
-                            sink: Keys(k),
-                        })
-                        .collect()
-                });
+                fill::draw(
+                    scene,
+                    &proj,
+                    side,
+                    side,
+                    scratch,
+                    |rows| {
+                        fill::split_rows(&mut key, side, rows)
+                            .into_iter()
+                            .map(|(y0, k)| Band {
+                                y0,
+                                rows: k.len() / side,
+                                width: side,
+                                sink: Keys(k),
+                            })
+                            .collect()
+                    },
+                    |_| (),
+                );
                 key
             })
             .collect();

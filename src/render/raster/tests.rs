@@ -634,8 +634,12 @@ fn ids_refuses_more_than_65535_bodies() {
 struct Count<'a>(&'a mut [u32]);
 
 impl Sink for Count<'_> {
-    fn plot(&mut self, i: usize, _key: f32, _face: u32) {
-        self.0[i] += 1;
+    fn clear(&mut self) {
+        self.0.fill(0);
+    }
+
+    fn plot(&mut self, i: usize, key: f32, _face: u32) {
+        self.0[i] += u32::from(key > 0.0);
     }
 }
 
