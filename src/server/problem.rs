@@ -89,6 +89,16 @@ impl Problem {
         )
     }
 
+    /// 500: the server failed (a worker thread panicked, an answer could not be encoded).
+    pub fn internal(detail: impl std::fmt::Display) -> Self {
+        Self::new(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            "internal",
+            "Internal error",
+            detail.to_string(),
+        )
+    }
+
     /// 404: no such resource.
     pub fn not_found(detail: impl Into<String>) -> Self {
         Self::new(StatusCode::NOT_FOUND, "not-found", "Not found", detail)

@@ -101,10 +101,15 @@ pub enum Format {
     Svg,
 }
 
-/// How to draw, as a request gives it (query string or JSON body).
+/// What to draw and how, as a request gives it: the query string of
+/// `GET /v1/cameras/{name}/image` (whose path names the camera), or the JSON body of
+/// `POST /v1/appearance` (which must name or give the camera).
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Drawing {
+    /// The camera: in a `POST /v1/appearance` body only.
+    #[serde(default)]
+    pub camera: Option<CameraRef>,
     /// The mode (default `shaded`).
     #[serde(default)]
     pub mode: Mode,
@@ -129,58 +134,6 @@ pub struct Drawing {
     /// Meters per unit of a `depth` image (default 0.001).
     #[serde(default)]
     pub depth_scale: Option<f64>,
-}
-
-/// `POST /v1/appearance`: a camera (a stored camera's name, or one inline) and how to
-/// draw, with the fields of [`Drawing`].
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AppearanceReq {
-    /// The camera.
-    pub camera: CameraRef,
-    /// See [`Drawing::mode`].
-    #[serde(default)]
-    pub mode: Mode,
-    /// See [`Drawing::format`].
-    #[serde(default)]
-    pub format: Format,
-    /// See [`Drawing::width`].
-    #[serde(default)]
-    pub width: Option<u32>,
-    /// See [`Drawing::height`].
-    #[serde(default)]
-    pub height: Option<u32>,
-    /// See [`Drawing::background`].
-    #[serde(default)]
-    pub background: Option<String>,
-    /// See [`Drawing::shadows`].
-    #[serde(default)]
-    pub shadows: Option<bool>,
-    /// See [`Drawing::near`].
-    #[serde(default)]
-    pub near: Option<f64>,
-    /// See [`Drawing::depth_scale`].
-    #[serde(default)]
-    pub depth_scale: Option<f64>,
-}
-
-impl AppearanceReq {
-    /// The camera and the drawing.
-    fn split(self) -> (CameraRef, Drawing) {
-        (
-            self.camera,
-            Drawing {
-                mode: self.mode,
-                format: self.format,
-                width: self.width,
-                height: self.height,
-                background: self.background,
-                shadows: self.shadows,
-                near: self.near,
-                depth_scale: self.depth_scale,
-            },
-        )
-    }
 }
 
 /// A stored camera's name, or a camera given inline.
@@ -313,16 +266,24 @@ pub(super) async fn camera_image(
 ) -> Answer {
     let Path(name) = name.map_err(|e| bad(e.body_text()))?;
     let Query(drawing) = drawing.map_err(|e| bad(e.body_text()))?;
+    if drawing.camera.is_some() {
+        return Err(bad(
+            "the camera is the one the path names; leave out camera=",
+        ));
+    }
     draw(&state, CameraRef::Named(name), drawing).await
 }
 
 /// `POST /v1/appearance`.
 pub(super) async fn appearance(
     State(state): State<AppState>,
-    req: Result<axum::Json<AppearanceReq>, JsonRejection>,
+    req: Result<axum::Json<Drawing>, JsonRejection>,
 ) -> Answer {
-    let axum::Json(req) = req.map_err(|e| bad(e.body_text()))?;
-    let (camera, drawing) = req.split();
+    let axum::Json(mut drawing) = req.map_err(|e| bad(e.body_text()))?;
+    let camera = drawing
+        .camera
+        .take()
+        .ok_or_else(|| bad("give the camera: a stored camera's name, or one inline"))?;
     draw(&state, camera, drawing).await
 }
 
@@ -366,14 +327,7 @@ async fn draw(state: &AppState, camera: CameraRef, drawing: Drawing) -> Answer {
         Ok::<_, Problem>(encode(&scene, picture, plan.format, &plan.options))
     })
     .await
-    .map_err(|e| {
-        Problem::new(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            "internal",
-            "Internal error",
-            e.to_string(),
-        )
-    })??;
+    .map_err(Problem::internal)??;
     tracing::debug!(
         mode = plan.mode.name(),
         revision,

@@ -88,14 +88,7 @@ pub(super) async fn list_bodies(
             .collect()
     })
     .await
-    .map_err(|e| {
-        Problem::new(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            "internal",
-            "Internal error",
-            e.to_string(),
-        )
-    })?;
+    .map_err(Problem::internal)?;
     Ok(read_answer(
         revision,
         json!({ "bodies": bodies, "revision": revision }),
@@ -138,22 +131,8 @@ pub(super) async fn topology(
         serde_json::to_vec(&dto)
     })
     .await
-    .map_err(|e| {
-        Problem::new(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            "internal",
-            "Internal error",
-            e.to_string(),
-        )
-    })?
-    .map_err(|e| {
-        Problem::new(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            "internal",
-            "Internal error",
-            e.to_string(),
-        )
-    })?;
+    .map_err(Problem::internal)?
+    .map_err(Problem::internal)?;
     Ok((
         [(axum::http::header::CONTENT_TYPE, "application/json")],
         bytes,
