@@ -71,7 +71,11 @@ pub fn blocks(count: usize, seed: u64) -> Result<World, WorldError> {
             let (dx, dy) = (rng.range(0.6, 2.0), rng.range(0.6, 2.0));
             world.insert_with(None, root, pose, |s| solids::mkcube(s, dx, dy, height))?
         } else {
-            let sides = if rng.next_u64() % 2 == 0 { 3 } else { 6 };
+            let sides = if rng.next_u64().is_multiple_of(2) {
+                3
+            } else {
+                6
+            };
             let r = rng.range(0.4, 1.0);
             let polygon: Vec<DVec2> = (0..sides)
                 .map(|k| {
