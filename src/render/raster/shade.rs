@@ -38,8 +38,8 @@
 //! The maps hold the *far* sides of occluders (the faces turned away from the light) —
 //! second-depth shadow mapping (Wang and Molnar, 1994). A lit face is then compared with
 //! the back of its own body, never with itself, so there is no shadow acne on lit faces;
-//! a small slope-scaled bias (¾ texel times the tangent of the light's incidence, capped,
-//! plus half a texel) covers the rest. Bodies are closed, so every occluder has a far
+//! a small slope-scaled bias (¾ texel times the tangent of the light's incidence, capped
+//! at 3, plus half a texel) covers the rest. Bodies are closed, so every occluder has a far
 //! side. One tap per pixel: shadow edges are as sharp as the map's texels.
 
 use std::sync::OnceLock;
@@ -339,10 +339,12 @@ impl Lamp {
 }
 
 /// The slope-scaled part of the shadow bias, in texels, for a surface lit at incidence
-/// cosine `nl` (> 0): ¾ texel of the surface's depth slope (capped), plus half a texel.
+/// cosine `nl` (> 0): ¾ texel of the surface's depth slope (capped at 3, past which the
+/// light is dim and a larger bias would let light leak under bodies standing on the
+/// surface), plus half a texel.
 #[inline]
 fn bias_texels(nl: f64) -> f64 {
-    let slope = ((1.0 - nl * nl).max(0.0).sqrt() / nl).min(8.0);
+    let slope = ((1.0 - nl * nl).max(0.0).sqrt() / nl).min(3.0);
     0.75 * slope + 0.5
 }
 
