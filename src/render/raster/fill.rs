@@ -155,9 +155,8 @@ pub(super) trait Sink {
     fn clear(&mut self);
 }
 
-/// A z-buffer with face ids, both starting as zeros (so that fresh, lazily zeroed pages
-/// serve): a pixel holds face `f` as `f + 1`, and 0 where no face was drawn; a key must
-/// be positive to be drawn.
+/// A z-buffer with face ids, both cleared to zeros: a pixel holds face `f` as `f + 1`,
+/// and 0 where no face was drawn; a key must be positive to be drawn.
 pub(super) struct Ids<'a> {
     /// Keys, nearer larger.
     pub key: &'a mut [f32],
@@ -285,8 +284,8 @@ fn edge(p: [f64; 2], q: [f64; 2]) -> [f64; 3] {
     [a, b, c].map(|v| f64::from_bits(v.to_bits() ^ sign))
 }
 
-/// Boxes of at most this many pixel centres, and at most 64 wide, are tested centre by
-/// centre (a row's tests make a bit mask, branch-free), without the per-row span set-up.
+/// Boxes of at most this many pixel centres are tested centre by centre, branch-free,
+/// without the per-row span set-up.
 const SMALL_BOX: usize = 128;
 
 /// Fills triangle `v` (pixel coordinates) of `face` with key plane `plane` into the rows
