@@ -53,9 +53,9 @@ impl RgbImage {
         }
         let a = alpha.clamp(0.0, 1.0);
         let i = (y as usize * self.width as usize + x as usize) * 3;
-        for (px, &ck) in self.data[i..i + 3].iter_mut().zip(&c) {
-            let old = *px as f64;
-            *px = (old + (ck as f64 - old) * a).round() as u8;
+        for (d, &c) in self.data[i..i + 3].iter_mut().zip(&c) {
+            let old = *d as f64;
+            *d = round_byte(old + (c as f64 - old) * a);
         }
     }
 
@@ -69,6 +69,14 @@ impl RgbImage {
             &self.data,
         )
     }
+}
+
+/// `v` (between 0 and 255) rounded half away from zero, as `f64::round` does, but without
+/// a libm call (the baseline x86-64 target has no rounding instruction); NaN gives 0.
+#[inline]
+fn round_byte(v: f64) -> u8 {
+    let t = v as u8;
+    if v - t as f64 >= 0.5 { t + 1 } else { t }
 }
 
 /// A 16-bit single-channel image, row-major from the top-left pixel.
@@ -151,5 +159,15 @@ mod tests {
         reader.next_frame(&mut buf).unwrap();
         assert_eq!(&buf[2..4], &[1, 2]);
         assert_eq!(&buf[14..16], &[255, 255]);
+    }
+
+    #[test]
+    fn bytes_round_as_f64_round_does() {
+        for i in 0..=2550 {
+            let v = i as f64 / 10.0;
+            assert_eq!(round_byte(v), v.round() as u8, "{v}");
+        }
+        assert_eq!(round_byte(0.499_999_999_999_999_94), 0);
+        assert_eq!(round_byte(f64::NAN), 0);
     }
 }

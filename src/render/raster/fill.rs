@@ -12,15 +12,23 @@
 //! [`draw`] then runs in three parallel passes:
 //!
 //! 1. *Points*: every point is projected once (f64).
-//! 2. *Binning*, in chunks of triangles: triangles of faces the view does not draw (back
-//!    faces, for instance) and triangles whose bounding box holds no pixel centre (most
-//!    triangles of a big world) are dropped at once; the others are listed in every
-//!    horizontal band of rows their box touches. A triangle with a corner not beyond the
-//!    near plane is clipped there first ([`Projection::clip`]) and its pieces kept with
-//!    explicit coordinates.
-//! 3. *Bands*, in parallel: each band of rows walks its lists in triangle order, gets
-//!    each face's key plane, and fills pixels with a depth test, so the result does not
-//!    depend on the thread count.
+//! 2. *Binning*, in fixed chunks of triangles, reading the scene in order: triangles of
+//!    faces the view does not draw (back faces, for instance) and triangles whose
+//!    bounding box holds no pixel centre are dropped at once. Small triangles (most
+//!    triangles of a big world) are drawn right there, into *fragments* (pixel, key,
+//!    face) listed by horizontal band of rows; the others are listed, by index, in every
+//!    band their box touches. A triangle with a corner not beyond the near plane is
+//!    clipped there first ([`Projection::clip`]) and its pieces kept with explicit
+//!    coordinates.
+//! 3. *Bands*, in parallel: each band of rows is cleared, then takes, chunk by chunk, its
+//!    fragments and its triangles with a depth test, then is finished (keys turned into
+//!    depths, say) while it is still in the cache. The order in which a pixel's
+//!    candidates arrive depends only on the scene, so the result does not depend on the
+//!    thread count.
+//!
+//! Inner loops are branch-free where the outcome is a coin toss (which end of an edge
+//! comes first, whether a centre is inside, which surface is nearer), and floor and ceil
+//! avoid libm calls, which the baseline x86-64 target would otherwise make.
 //!
 //! # The sampling rule
 //!
@@ -31,7 +39,8 @@
 //! each edge's coefficients are computed from its lexicographically smaller end, so two
 //! triangles sharing an edge evaluate bit-for-bit opposite values there: a shared edge is
 //! never drawn twice and never leaves a crack, and a centre is classified correctly
-//! unless it lies within about 1e-12 pixels of an edge.
+//! unless it lies within about 1e-12 pixels of an edge. (Fragments and band fills run
+//! the same code, so they decide alike.)
 
 use std::hint::select_unpredictable;
 
@@ -146,9 +155,8 @@ pub(super) trait Sink {
     fn clear(&mut self);
 }
 
-/// A z-buffer with face ids, both starting as zeros (so that fresh, lazily zeroed pages
-/// serve): a pixel holds face `f` as `f + 1`, and 0 where no face was drawn; a key must
-/// be positive to be drawn.
+/// A z-buffer with face ids, both cleared to zeros: a pixel holds face `f` as `f + 1`,
+/// and 0 where no face was drawn; a key must be positive to be drawn.
 pub(super) struct Ids<'a> {
     /// Keys, nearer larger.
     pub key: &'a mut [f32],
@@ -276,8 +284,8 @@ fn edge(p: [f64; 2], q: [f64; 2]) -> [f64; 3] {
     [a, b, c].map(|v| f64::from_bits(v.to_bits() ^ sign))
 }
 
-/// Boxes of at most this many pixel centres, and at most 64 wide, are tested centre by
-/// centre (a row's tests make a bit mask, branch-free), without the per-row span set-up.
+/// Boxes of at most this many pixel centres are tested centre by centre, branch-free,
+/// without the per-row span set-up.
 const SMALL_BOX: usize = 128;
 
 /// Fills triangle `v` (pixel coordinates) of `face` with key plane `plane` into the rows
@@ -285,11 +293,22 @@ const SMALL_BOX: usize = 128;
 /// triangles (no area) and non-finite ones draw nothing.
 #[inline]
 pub(super) fn fill<S: Sink>(band: &mut Band<S>, v: [[f64; 2]; 3], plane: [f64; 3], face: u32) {
-    let height = band.y0 + band.rows;
-    let Some((x0, x1, y0, y1)) = pixel_box(&v, band.width, height) else {
-        return;
-    };
-    let y0 = y0.max(band.y0);
+    if let Some(bbox) = pixel_box(&v, band.width, band.y0 + band.rows) {
+        fill_box(band, v, plane, face, bbox);
+    }
+}
+
+/// [`fill`] for a triangle whose [`pixel_box`] in a raster as wide as the band and
+/// reaching at least to its last row is `(x0, x1, y0, y1)`.
+#[inline]
+fn fill_box<S: Sink>(
+    band: &mut Band<S>,
+    v: [[f64; 2]; 3],
+    plane: [f64; 3],
+    face: u32,
+    (x0, x1, y0, y1): (usize, usize, usize, usize),
+) {
+    let (y0, y1) = (y0.max(band.y0), y1.min(band.y0 + band.rows - 1));
     if y0 > y1 {
         return;
     }
@@ -297,7 +316,7 @@ pub(super) fn fill<S: Sink>(band: &mut Band<S>, v: [[f64; 2]; 3], plane: [f64; 3
     // Orientation: the inside is where every edge function has the sign it has at the
     // opposite corner.
     let s = e[0][0] * v[2][0] + (e[0][1] * v[2][1] + e[0][2]);
-    if s.partial_cmp(&0.0).is_none_or(|o| o.is_eq()) {
+    if s == 0.0 || s.is_nan() {
         return;
     }
     let sign = s.to_bits() & (1 << 63);
@@ -561,7 +580,7 @@ where
                 };
                 if (x1 - x0 + 1) * (y1 - y0 + 1) <= FRAGMENT_BOX {
                     let plane = *plane.get_or_insert_with(|| proj.plane(&scene.faces[f as usize]));
-                    fill(&mut small, v, plane, f);
+                    fill_box(&mut small, v, plane, f, (x0, x1, y0, y1));
                 } else {
                     for bin in &mut bins[y0 / rows..=y1 / rows] {
                         bin.push(k as u32);

@@ -4,10 +4,12 @@
 //! [`rasterize`] makes a [`Frame`]: for every pixel, the nearest surface's depth and face.
 //! A pixel shows a triangle when the pixel's *centre* is inside the projected triangle
 //! (top-left rule on edges, so shared edges are neither drawn twice nor cracked); its depth
-//! is exact, computed from the face's plane along the ray through the pixel centre.
-//! Triangles are clipped at the camera's near plane before projection, back faces (those
-//! whose outside does not look toward the eye) are culled. See [`fill`] for the
-//! rasterizer itself and how it runs in parallel.
+//! comes from the face's plane along the ray through the pixel centre (1/depth is an
+//! affine function of the pixel, evaluated in f64 and kept in f32: the depth is exact to
+//! within an ulp or two of f32). Triangles are clipped at the camera's near plane before
+//! projection; back faces (those whose outside does not look toward the eye) are culled.
+//! The rasterizer itself and how it runs in parallel are described in the `fill` module's
+//! source.
 //!
 //! From the frame: [`shaded`] lights each pixel (Lambert, with shadows from shadow maps;
 //! see [`Shading`]), [`depth_image`] and [`ids_image`] encode depth and bodies as 16-bit
@@ -30,7 +32,7 @@ use crate::model::BodyId;
 use super::image::{Gray16, RgbImage};
 use super::lines::draw_line;
 use super::scene::Scene;
-use fill::{Band, Ids, Perspective, Projection, Scratch};
+use fill::{Band, Ids, Perspective, Scratch};
 
 pub use shade::{Shading, shaded};
 
@@ -71,8 +73,8 @@ impl Frame {
 ///
 /// Postconditions: `face[i]` is the face of the nearest front-facing triangle whose
 /// projection (after clipping at `view.near`) contains pixel `i`'s centre, or [`NO_FACE`];
-/// `depth[i]` is the depth of that face's plane along the ray through the pixel centre, or
-/// infinity. Never panics: a camera inside a body or facing away from everything gives an
+/// `depth[i]` is the depth of that face's plane along the ray through the pixel centre
+/// (relative error below 2e-7), or infinity. Never panics: a camera inside a body or facing away from everything gives an
 /// empty frame, and a zero-sized image an empty one.
 pub fn rasterize(scene: &Scene, view: &View) -> Frame {
     rasterize_with(scene, view, &mut Scratch::default(), |_, _, _| ()).0
@@ -120,24 +122,17 @@ where
                 .collect()
         },
         |band| {
-            // Keys to depths: the exact depth from the face's plane at each pixel centre.
+            // Keys to depths. The key is 1/depth from the face's plane along the pixel
+            // centre's ray, rounded to f32 (6e-8 relative), so the depth is as exact as
+            // an f32 depth can be, to within an ulp or two.
             let Ids { key, face } = &mut band.sink;
-            for (r, (depth, faces)) in key.chunks_mut(w).zip(face.chunks_mut(w)).enumerate() {
-                let py = (band.y0 + r) as f64 + 0.5;
-                let (mut last, mut plane) = (0, [0.0; 3]);
-                for (x, (d, f)) in depth.iter_mut().zip(faces).enumerate() {
-                    if *f == 0 {
-                        *f = NO_FACE;
-                        *d = f32::INFINITY;
-                        continue;
-                    }
-                    if *f != last {
-                        last = *f;
-                        plane = proj.plane(&scene.faces[*f as usize - 1]);
-                    }
+            for (d, f) in key.iter_mut().zip(face.iter_mut()) {
+                if *f == 0 {
+                    *f = NO_FACE;
+                    *d = f32::INFINITY;
+                } else {
                     *f -= 1;
-                    let [a, b, c] = plane;
-                    *d = (1.0 / (a * (x as f64 + 0.5) + b * py + c)) as f32;
+                    *d = 1.0 / *d;
                 }
             }
             per_band(band.y0, key, face)
@@ -258,6 +253,10 @@ pub fn ids_image(scene: &Scene, frame: &Frame) -> Result<(Gray16, Vec<BodyId>), 
     Ok((img, legend))
 }
 
+/// One chunk of edges for [`wire`]: the visible ones' segments (pixel coordinates) and,
+/// per band of rows, the segments that reach it.
+type WireChunk = (Vec<(DVec2, DVec2)>, Vec<Vec<u32>>);
+
 /// The wireframe of `scene` from `view`: every edge, front or back, clipped at the near
 /// plane and the window ([`View::clip_segment`]), drawn anti-aliased in `ink` on
 /// `background` ([`draw_line`]), in scene order.
@@ -271,44 +270,51 @@ pub fn wire(scene: &Scene, view: &View, background: [u8; 3], ink: [u8; 3]) -> Rg
     if w == 0 || h == 0 {
         return RgbImage::filled(width, height, background);
     }
-    let segments: Vec<(DVec2, DVec2)> = scene
-        .edges
-        .par_iter()
-        .with_min_len(4096)
-        .filter_map(|e| {
-            let a = view.to_camera(scene.points[e.ends[0] as usize]);
-            let b = view.to_camera(scene.points[e.ends[1] as usize]);
-            let (t0, t1) = view.clip_segment(a, b)?;
-            Some((view.project(a.lerp(b, t0)), view.project(a.lerp(b, t1))))
-        })
-        .collect();
     let threads = rayon::current_num_threads().max(1);
     let rows = h.div_ceil(threads * 8).clamp(8, 256);
     let nbands = h.div_ceil(rows);
-    // Bin segments by the bands their drawn rows may reach (a row either side for the
+    // In chunks of edges, in parallel: each visible edge's clipped, projected segment,
+    // listed in every band of rows its drawing may reach (a row either side for the
     // anti-aliasing, half a pixel more for the end caps).
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nbands];
-    for (i, (a, b)) in segments.iter().enumerate() {
-        let lo = (a.y.min(b.y) - 2.0).floor().max(0.0) as usize;
-        let hi = ((a.y.max(b.y) + 2.0).ceil().max(0.0) as usize).min(h - 1);
-        if lo > hi {
-            continue;
-        }
-        for bin in &mut bins[lo / rows..=hi / rows] {
-            bin.push(i as u32);
-        }
-    }
-    let bands: Vec<RgbImage> = bins
-        .par_iter()
-        .enumerate()
-        .map(|(b, bin)| {
+    let chunks: Vec<WireChunk> = scene
+        .edges
+        .par_chunks(8192)
+        .map(|edges| {
+            let mut segments = Vec::with_capacity(edges.len());
+            let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nbands];
+            for e in edges {
+                let a = view.to_camera(scene.points[e.ends[0] as usize]);
+                let b = view.to_camera(scene.points[e.ends[1] as usize]);
+                let Some((t0, t1)) = view.clip_segment(a, b) else {
+                    continue;
+                };
+                let (p, q) = (view.project(a.lerp(b, t0)), view.project(a.lerp(b, t1)));
+                // Clipped to the window, so the rows are in range (NaN ends give 0).
+                let lo = (p.y.min(q.y) - 2.0).max(0.0) as usize;
+                let hi = ((p.y.max(q.y) + 2.0).max(0.0) as usize).min(h - 1);
+                if lo > hi {
+                    continue;
+                }
+                for bin in &mut bins[lo / rows..=hi / rows] {
+                    bin.push(segments.len() as u32);
+                }
+                segments.push((p, q));
+            }
+            (segments, bins)
+        })
+        .collect();
+    let bands: Vec<RgbImage> = (0..nbands)
+        .into_par_iter()
+        .map(|b| {
             let y0 = b * rows;
             let n = rows.min(h - y0);
             let mut img = RgbImage::filled(width, n as u32, background);
             let shift = DVec2::new(0.0, y0 as f64);
-            for &i in bin {
-                let (a, c) = segments[i as usize];
-                draw_line(&mut img, a - shift, c - shift, ink);
+            for (segments, bins) in &chunks {
+                for &i in &bins[b] {
+                    let (a, c) = segments[i as usize];
+                    draw_line(&mut img, a - shift, c - shift, ink);
+                }
             }
             img
         })

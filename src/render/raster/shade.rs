@@ -38,8 +38,8 @@
 //! The maps hold the *far* sides of occluders (the faces turned away from the light) —
 //! second-depth shadow mapping (Wang and Molnar, 1994). A lit face is then compared with
 //! the back of its own body, never with itself, so there is no shadow acne on lit faces;
-//! a small slope-scaled bias (¾ texel times the tangent of the light's incidence, capped,
-//! plus half a texel) covers the rest. Bodies are closed, so every occluder has a far
+//! a small slope-scaled bias (¾ texel times the tangent of the light's incidence, capped
+//! at 3, plus half a texel) covers the rest. Bodies are closed, so every occluder has a far
 //! side. One tap per pixel: shadow edges are as sharp as the map's texels.
 
 use std::sync::OnceLock;
@@ -65,9 +65,9 @@ pub struct Shading {
     /// Whether lights cast shadows (true by default).
     pub shadows: bool,
     /// Texels on the longer side of a sun's shadow map and on the side of each of a
-    /// point light's six maps; 0 (the default) chooses from the image size: its longer
-    /// side (between 256 and 4096) for suns, whose maps are fitted to what the picture
-    /// shows, and half of it (between 128 and 2048) for point lights.
+    /// point light's six maps; 0 (the default) chooses from the image size: ¾ of its
+    /// longer side (between 256 and 4096) for suns, whose maps are fitted to what the
+    /// picture shows, and half of it (between 128 and 2048) for point lights.
     pub shadow_map_size: u32,
 }
 
@@ -134,7 +134,7 @@ pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
     let mut scratch = Scratch::default();
     let (frame, boxes) = rasterize_with(scene, view, &mut scratch, |y0, depth, face| {
         if fit {
-            footprints(scene, &rays, &suns, y0, w, depth, face)
+            footprints(&rays, &suns, y0, w, depth, face)
         } else {
             Vec::new()
         }
@@ -146,7 +146,7 @@ pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
             (s, s)
         } else {
             (
-                side.clamp(256.0, 4096.0) as usize,
+                (0.75 * side).clamp(256.0, 4096.0) as usize,
                 (0.5 * side).clamp(128.0, 2048.0) as usize,
             )
         };
@@ -157,7 +157,8 @@ pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
                         .iter()
                         .fold(EMPTY, |a, b| b.get(k).map_or(a, |b| union(a, *b)));
                     if footprint[0] <= footprint[1] && footprint[2] <= footprint[3] {
-                        *map = SunMap::new(scene, -*toward, footprint, sun_side, &mut scratch);
+                        *map =
+                            SunMap::new(scene, -*toward, footprint, sun_side, &rays, &mut scratch);
                     }
                 }
                 Lamp::Point { position, map, .. } => {
@@ -200,10 +201,10 @@ pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
                         *p = lamp.prepare(n);
                     }
                 }
-                let p = rays.point(x as f64 + 0.5, py, depth as f64);
+                let at = (x as f64 + 0.5, py, depth as f64);
                 let mut light = ambient;
                 for (lamp, &prep) in lamps.iter().zip(&prep) {
-                    light += lamp.light(p, n, prep);
+                    light += lamp.light(&rays, at, n, prep);
                 }
                 let l = light as f32;
                 for k in 0..3 {
@@ -303,13 +304,13 @@ impl Lamp {
         }
     }
 
-    /// The light this lamp gives a surface with unit normal `n` at `p`; `prep` is
-    /// [`Lamp::prepare`] of `n`.
+    /// The light this lamp gives the surface with unit normal `n` seen at depth `d` at
+    /// pixel coordinates (`u`, `v`) (`at` = (u, v, d)); `prep` is [`Lamp::prepare`] of `n`.
     #[inline]
-    fn light(&self, p: DVec3, n: DVec3, (nl, bias): (f64, f64)) -> f64 {
+    fn light(&self, rays: &Rays, at: (f64, f64, f64), n: DVec3, (nl, bias): (f64, f64)) -> f64 {
         match self {
             Lamp::Sun { intensity, map, .. } => {
-                if nl <= 0.0 || map.as_ref().is_some_and(|m| !m.lit(p, bias)) {
+                if nl <= 0.0 || map.as_ref().is_some_and(|m| !m.lit_at(at, bias)) {
                     0.0
                 } else {
                     nl * intensity
@@ -320,9 +321,10 @@ impl Lamp {
                 intensity,
                 map,
             } => {
+                let p = rays.point(at.0, at.1, at.2);
                 let d = *position - p;
                 let d2 = d.length_squared();
-                if d2.partial_cmp(&0.0).is_none_or(|o| o.is_le()) {
+                if d2.is_nan() || d2 <= 0.0 {
                     return 0.0;
                 }
                 let nl = n.dot(d) / d2.sqrt();
@@ -337,26 +339,27 @@ impl Lamp {
 }
 
 /// The slope-scaled part of the shadow bias, in texels, for a surface lit at incidence
-/// cosine `nl` (> 0): ¾ texel of the surface's depth slope (capped), plus half a texel.
+/// cosine `nl` (> 0): ¾ texel of the surface's depth slope (capped at 3, past which the
+/// light is dim and a larger bias would let light leak under bodies standing on the
+/// surface), plus half a texel.
 #[inline]
 fn bias_texels(nl: f64) -> f64 {
-    let slope = ((1.0 - nl * nl).max(0.0).sqrt() / nl).min(8.0);
+    let slope = ((1.0 - nl * nl).max(0.0).sqrt() / nl).min(3.0);
     0.75 * slope + 0.5
 }
 
-/// A sun's light-space frame: unit `toward` the sun and axes `s`, `t` across its rays
-/// ([`sun_axes`]).
+/// A sun's light-space axes `s`, `t` across its rays ([`sun_axes`]).
 #[derive(Clone, Copy, Debug)]
 struct Axes {
-    toward: DVec3,
     s: DVec3,
     t: DVec3,
 }
 
 impl Axes {
+    /// The axes of the sun in direction `toward` (unit).
     fn new(toward: DVec3) -> Axes {
         let (s, t) = sun_axes(-toward);
-        Axes { toward, s, t }
+        Axes { s, t }
     }
 }
 
@@ -379,14 +382,15 @@ fn union(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
 }
 
 /// For each of `suns` (`None` for a lamp that needs no fitting), the light-space box of
-/// the points a band of the picture shows that the sun could light (surfaces facing it):
-/// rows from `y0`, `width` pixels wide, with the frame's `depth` and `face` values.
+/// the points a band of the picture shows: rows from `y0`, `width` pixels wide, with the
+/// frame's `depth` and `face` values. (Points on faces turned away from a sun are
+/// included; they make the box no smaller, and leaving them out would cost a look at
+/// every face.)
 ///
 /// Along a row, the pixels of one face show points on one straight line (the face's plane
 /// meets the plane through the eye and the row), so only the two ends of each run of a
 /// face need to be reconstructed.
 fn footprints(
-    scene: &Scene,
     rays: &Rays,
     suns: &[Option<Axes>],
     y0: usize,
@@ -405,14 +409,13 @@ fn footprints(
                 end += 1;
             }
             if f != NO_FACE {
-                let n = scene.faces[f as usize].normal;
                 for xs in [x, end - 1] {
                     let p = rays.point(xs as f64 + 0.5, py, depths[xs] as f64);
                     if !p.is_finite() {
                         continue;
                     }
                     for (b, sun) in acc.iter_mut().zip(suns) {
-                        if let Some(a) = sun.filter(|a| n.dot(a.toward) > 0.0) {
+                        if let Some(a) = sun {
                             let (u, v) = (a.s.dot(p), a.t.dot(p));
                             *b = union(*b, [u, u, v, v]);
                         }
@@ -475,7 +478,6 @@ impl Projection for Ortho {
 
 /// A sun's shadow map.
 struct SunMap {
-    view: Ortho,
     width: usize,
     height: usize,
     /// Keys of the nearest far-side surface per texel; 0 where none.
@@ -484,17 +486,22 @@ struct SunMap {
     texel: f64,
     /// Constant bias, meters (covers the f32 keys' rounding).
     eps: f64,
+    /// For the picture's pixels: texel u, texel v and key of the point at depth d on the
+    /// ray through pixel coordinates (x, y), each `c + d·(d0 + x·dx + y·dy)` with
+    /// `[c, d0, dx, dy]` from here (see [`SunMap::lit_at`]).
+    camera: [[f64; 4]; 3],
 }
 
 impl SunMap {
     /// The map of the sun shining along unit `direction` over the light-space box
-    /// `footprint` of its receivers, `side` texels on its longer side. `None` for a scene
-    /// without geometry.
+    /// `footprint` of its receivers, `side` texels on its longer side, for the picture
+    /// whose pixel rays are `rays`. `None` for a scene without geometry.
     fn new(
         scene: &Scene,
         direction: DVec3,
         footprint: [f64; 4],
         side: usize,
+        rays: &Rays,
         scratch: &mut Scratch,
     ) -> Option<SunMap> {
         let bounds = scene.bounds?;
@@ -524,6 +531,19 @@ impl SunMap {
             zc,
         };
         let mut key = vec![0.0f32; width * height];
+        let rows = |a: DVec3, c: f64, k: f64| {
+            [
+                c,
+                k * a.dot(rays.d0),
+                k * a.dot(rays.du),
+                k * a.dot(rays.dv),
+            ]
+        };
+        let camera = [
+            rows(s, (s.dot(rays.eye) - view.x0) * view.scale, view.scale),
+            rows(t, (t.dot(rays.eye) - view.y0) * view.scale, view.scale),
+            rows(direction, zc - direction.dot(rays.eye), -1.0),
+        ];
         fill::draw(
             scene,
             &view,
@@ -544,24 +564,27 @@ impl SunMap {
             |_| (),
         );
         Some(SunMap {
-            view,
             width,
             height,
             key,
             texel,
             eps: diag * 2e-6,
+            camera,
         })
     }
 
-    /// Whether the sun sees `p`, allowing `bias` meters toward the sun.
+    /// Whether the sun sees the point the picture shows at `at` = (x, y, depth), allowing
+    /// `bias` meters toward the sun.
     #[inline]
-    fn lit(&self, p: DVec3, bias: f64) -> bool {
-        let [u, v] = self.view.point(p);
+    fn lit_at(&self, (x, y, d): (f64, f64, f64), bias: f64) -> bool {
+        let [u, v, key] = self
+            .camera
+            .map(|[c, d0, dx, dy]| c + d * (d0 + x * dx + y * dy));
         if !(u >= 0.0 && v >= 0.0 && u < self.width as f64 && v < self.height as f64) {
             return true;
         }
         let k = self.key[v as usize * self.width + u as usize] as f64;
-        k <= self.view.zc - self.view.w.dot(p) + bias
+        k <= key + bias
     }
 }
 
@@ -653,7 +676,7 @@ impl CubeMap {
         let view = &self.views[f];
         let c = view.to_camera(p);
         let depth = -c.z;
-        if depth.partial_cmp(&0.0).is_none_or(|o| o.is_le()) {
+        if depth.is_nan() || depth <= 0.0 {
             return true;
         }
         let uv = view.project(c);
@@ -661,7 +684,7 @@ impl CubeMap {
         let x = uv.x.floor().max(0.0).min(last) as usize;
         let y = uv.y.floor().max(0.0).min(last) as usize;
         let k = self.keys[f][y * self.side + x] as f64;
-        if k.partial_cmp(&0.0).is_none_or(|o| o.is_le()) {
+        if k.is_nan() || k <= 0.0 {
             return true;
         }
         let texel = depth * 2.0 / self.side as f64;
