@@ -216,11 +216,7 @@ fn a_cube_behind_another_is_cut_at_the_front_cubes_silhouette() {
     let mut expected: Vec<(u64, u64, DVec2, DVec2)> = Vec::new();
     let mut cut = 0;
     for e in &s.edges {
-        let front = e
-            .faces
-            .iter()
-            .any(|&f| s.faces[f as usize].faces_toward(eye));
-        if !front {
+        if !s.edge_faces_toward(e, eye) {
             continue;
         }
         let body = s.bodies[e.body as usize].id;
@@ -261,14 +257,7 @@ fn a_cube_behind_another_is_cut_at_the_front_cubes_silhouette() {
 
 #[test]
 fn an_l_prism_hides_part_of_itself() {
-    let l = [
-        DVec2::new(0.0, 0.0),
-        DVec2::new(2.0, 0.0),
-        DVec2::new(2.0, 1.0),
-        DVec2::new(1.0, 1.0),
-        DVec2::new(1.0, 2.0),
-        DVec2::new(0.0, 2.0),
-    ];
+    let l = winged::render::sample::L_SHAPE;
     let mut w = World::new();
     let root = w.root();
     w.insert_with(None, root, Pose::IDENTITY, |s| {
@@ -403,11 +392,7 @@ fn a_concave_plate_hides_a_bar_except_under_its_notch() {
     );
     let mut expected = Vec::new();
     for e in &s.edges {
-        if !e
-            .faces
-            .iter()
-            .any(|&f| s.faces[f as usize].faces_toward(eye))
-        {
+        if !s.edge_faces_toward(e, eye) {
             continue;
         }
         let body = s.bodies[e.body as usize].id;
@@ -780,17 +765,10 @@ fn judge(s: &Scene, v: &View, segs: &[Segment]) -> Verdict {
 /// The L-shaped hexagon of [`an_l_prism_hides_part_of_itself`], scaled by `s` and
 /// centred on the origin (its corners lie within `s·√2` of it).
 fn l_shape(s: f64) -> Vec<DVec2> {
-    [
-        (0.0, 0.0),
-        (2.0, 0.0),
-        (2.0, 1.0),
-        (1.0, 1.0),
-        (1.0, 2.0),
-        (0.0, 2.0),
-    ]
-    .iter()
-    .map(|&(x, y)| (DVec2::new(x, y) - DVec2::ONE) * s)
-    .collect()
+    winged::render::sample::L_SHAPE
+        .iter()
+        .map(|&p| (p - DVec2::ONE) * s)
+        .collect()
 }
 
 /// A world of `n` solids of random sizes and orientations that do not overlap (their
@@ -971,11 +949,7 @@ fn the_oracle_rejects_wrong_drawings() {
     // Without occlusion: every fold, clipped to the window.
     let mut all = Vec::new();
     for e in &s.edges {
-        if !e
-            .faces
-            .iter()
-            .any(|&f| s.faces[f as usize].faces_toward(eye))
-        {
+        if !s.edge_faces_toward(e, eye) {
             continue;
         }
         let [a, b] = e.ends.map(|i| v.to_camera(s.points[i as usize]));

@@ -914,14 +914,7 @@ mod tests {
 
     #[test]
     fn even_odd_handles_a_concave_polygon() {
-        let l = [
-            DVec2::new(0.0, 0.0),
-            DVec2::new(2.0, 0.0),
-            DVec2::new(2.0, 1.0),
-            DVec2::new(1.0, 1.0),
-            DVec2::new(1.0, 2.0),
-            DVec2::new(0.0, 2.0),
-        ];
+        let l = crate::render::sample::L_SHAPE;
         assert!(inside(&l, DVec2::new(0.5, 1.5)));
         assert!(inside(&l, DVec2::new(1.5, 0.5)));
         assert!(!inside(&l, DVec2::new(1.5, 1.5)));

@@ -11,6 +11,18 @@ use glam::{DQuat, DVec2, DVec3};
 
 use crate::model::{Camera, Color, Intrinsics, Light, Pose, World, WorldError, solids};
 
+/// An L-shaped hexagon, counter-clockwise in the xy plane: the square [0, 2]² without
+/// the quarter [1, 2]². Area 3; concave at (1, 1). Swept with
+/// [`solids::prism_solid`] it makes the concave prism tests and examples use.
+pub const L_SHAPE: [DVec2; 6] = [
+    DVec2::new(0.0, 0.0),
+    DVec2::new(2.0, 0.0),
+    DVec2::new(2.0, 1.0),
+    DVec2::new(1.0, 1.0),
+    DVec2::new(1.0, 2.0),
+    DVec2::new(0.0, 2.0),
+];
+
 /// A small, fast, well-mixed deterministic random stream (SplitMix64).
 #[derive(Clone, Debug)]
 pub struct SplitMix64(u64);

@@ -197,6 +197,14 @@ impl Scene {
         }));
     }
 
+    /// Whether edge `e` borders at least one face turned toward `eye`: only such edges
+    /// can show in a hidden-line drawing seen from there.
+    pub fn edge_faces_toward(&self, e: &SceneEdge, eye: DVec3) -> bool {
+        e.faces
+            .iter()
+            .any(|&f| self.faces[f as usize].faces_toward(eye))
+    }
+
     /// The perimeter of face `f` as indices into [`Scene::points`].
     pub fn ring(&self, f: &SceneFace) -> &[u32] {
         &self.rings[f.ring.start as usize..f.ring.end as usize]
@@ -382,14 +390,7 @@ mod tests {
     #[test]
     fn a_concave_face_is_triangulated_exactly() {
         // An L-shaped prism: its caps are concave hexagons of area 3.
-        let l = [
-            DVec2::new(0.0, 0.0),
-            DVec2::new(2.0, 0.0),
-            DVec2::new(2.0, 1.0),
-            DVec2::new(1.0, 1.0),
-            DVec2::new(1.0, 2.0),
-            DVec2::new(0.0, 2.0),
-        ];
+        let l = crate::render::sample::L_SHAPE;
         let mut w = World::new();
         let root = w.root();
         w.insert_with(None, root, Pose::IDENTITY, |s| {

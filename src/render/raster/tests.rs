@@ -506,14 +506,7 @@ fn the_ids_image_shows_the_front_cube_where_two_overlap() {
 
 #[test]
 fn a_concave_prism_shows_its_notch_as_background() {
-    let l = [
-        DVec2::new(0.0, 0.0),
-        DVec2::new(2.0, 0.0),
-        DVec2::new(2.0, 1.0),
-        DVec2::new(1.0, 1.0),
-        DVec2::new(1.0, 2.0),
-        DVec2::new(0.0, 2.0),
-    ];
+    let l = crate::render::sample::L_SHAPE;
     let mut world = World::new();
     let root = world.root();
     world
