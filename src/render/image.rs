@@ -60,6 +60,12 @@ impl RgbImage {
     }
 
     /// The PNG file of this image (8-bit RGB).
+    /// Gives the pixel buffer back for later pictures (see the renderer's buffer pool):
+    /// a caller done with an image may call this instead of dropping it.
+    pub fn recycle(self) {
+        super::buffers::give(self.data);
+    }
+
     pub fn to_png(&self) -> Vec<u8> {
         encode(
             self.width,

@@ -11,6 +11,7 @@
 //! at the near plane, so a pixel of the `ids` image, a depth value and a hidden-line
 //! segment all describe the same picture.
 
+pub(crate) mod buffers;
 pub mod hidden;
 pub mod image;
 pub mod lines;
@@ -165,14 +166,18 @@ pub fn render(
         },
         Mode::Depth => {
             let frame = raster::rasterize(scene, &view);
+            let image = raster::depth_image(&frame, options.depth_scale);
+            frame.recycle();
             Picture::Depth {
-                image: raster::depth_image(&frame, options.depth_scale),
+                image,
                 meters_per_unit: options.depth_scale,
             }
         }
         Mode::Ids => {
             let frame = raster::rasterize(scene, &view);
-            let (image, legend) = raster::ids_image(scene, &frame)?;
+            let ids = raster::ids_image(scene, &frame);
+            frame.recycle();
+            let (image, legend) = ids?;
             Picture::Ids { image, legend }
         }
     })

@@ -20,6 +20,8 @@ use rayon::prelude::*;
 
 use crate::model::{BodyId, Bounds, Color, FaceId, Light, World};
 
+use super::raster::ShadowCache;
+
 /// One body of the scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneBody {
@@ -93,6 +95,9 @@ pub struct Scene {
     pub lights: Vec<(String, Light)>,
     /// The world bounds of every point, `None` for a scene without geometry.
     pub bounds: Option<Bounds>,
+    /// Shadow maps of the lights, made by the first shaded picture that needs them and
+    /// kept for the next ones.
+    pub shadows: ShadowCache,
 }
 
 /// A pleasant, stable default colour for a body without one: a hue from the id, fixed

@@ -15,8 +15,9 @@
 //! see [`Shading`]), [`depth_image`] and [`ids_image`] encode depth and bodies as 16-bit
 //! images. [`wire`] draws every edge, front or back, as an anti-aliased line.
 //!
-//! Everything is computed per call from the scene and the view; nothing is cached between
-//! calls, so any number of cameras can render the same scene at once.
+//! Everything is computed per call from the scene and the view, except the shadow maps of
+//! the world's lights, which depend on the scene alone and are kept with it (see
+//! [`ShadowCache`]); any number of cameras can render the same scene at once.
 
 mod fill;
 mod shade;
@@ -29,12 +30,13 @@ use rayon::prelude::*;
 use crate::camera::View;
 use crate::model::BodyId;
 
+use super::buffers;
 use super::image::{Gray16, RgbImage};
 use super::lines::draw_line;
 use super::scene::Scene;
-use fill::{Band, Ids, Perspective, Scratch};
+use fill::{Band, Ids, Perspective, Scratch, Sink};
 
-pub use shade::{Shading, shaded};
+pub use shade::{Shading, ShadowCache, shaded};
 
 /// The face value of a pixel that shows no surface.
 pub const NO_FACE: u32 = u32::MAX;
@@ -56,6 +58,13 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// Gives the frame's buffers back for later pictures (see [`crate::render`]'s
+    /// buffer pool): a caller done with a frame may call this instead of dropping it.
+    pub fn recycle(self) {
+        buffers::give(self.depth);
+        buffers::give(self.face);
+    }
+
     /// The face at column `x`, row `y`, if any. Precondition: inside the frame.
     pub fn face_at(&self, x: u32, y: u32) -> Option<u32> {
         let f = self.face[y as usize * self.width as usize + x as usize];
@@ -74,31 +83,67 @@ impl Frame {
 /// Postconditions: `face[i]` is the face of the nearest front-facing triangle whose
 /// projection (after clipping at `view.near`) contains pixel `i`'s centre, or [`NO_FACE`];
 /// `depth[i]` is the depth of that face's plane along the ray through the pixel centre
-/// (relative error below 2e-7), or infinity. Never panics: a camera inside a body or facing away from everything gives an
-/// empty frame, and a zero-sized image an empty one.
+/// (relative error below 2e-7), or infinity. Never panics: a camera inside a body or
+/// facing away from everything gives an empty frame, and a zero-sized image an empty one.
 pub fn rasterize(scene: &Scene, view: &View) -> Frame {
-    rasterize_with(scene, view, &mut Scratch::default(), |_, _, _| ()).0
+    let mut none: [(); 0] = [];
+    rasterize_with(scene, view, &mut Scratch::default(), &mut none, 0, |_| ()).0
+}
+
+/// One finished band of rows of a frame, as [`rasterize_with`] hands it on.
+pub(super) struct FrameBand<'a, T> {
+    /// First row.
+    pub y0: usize,
+    /// Depths, as in [`Frame::depth`], `rows × width`.
+    pub depth: &'a [f32],
+    /// Faces, as in [`Frame::face`].
+    pub face: &'a [u32],
+    /// The band's rows of the caller's output raster.
+    pub out: &'a mut [T],
+}
+
+/// A z-buffer band that also carries the band's rows of an output raster.
+struct WithOutput<'a, T> {
+    ids: Ids<'a>,
+    out: &'a mut [T],
+}
+
+impl<T: Send> Sink for WithOutput<'_, T> {
+    #[inline(always)]
+    fn plot(&mut self, i: usize, key: f32, face: u32) {
+        self.ids.plot(i, key, face);
+    }
+
+    fn clear(&mut self) {
+        self.ids.clear();
+    }
 }
 
 /// [`rasterize`] with working memory `scratch`, also handing each finished band of rows
-/// (first row, depths, faces — as in the frame) to `per_band` while it is in the cache,
-/// and returning what it returns, band by band.
-fn rasterize_with<R, G>(
+/// to `per_band` while it is still in the cache, together with the same rows of `out`
+/// (an output raster of `per_pixel` values per pixel; empty, with `per_pixel` 0, when
+/// there is none), and returning what `per_band` returns, band by band.
+///
+/// Precondition: `out.len()` is `width · height · per_pixel`.
+fn rasterize_with<T, R, G>(
     scene: &Scene,
     view: &View,
     scratch: &mut Scratch,
+    out: &mut [T],
+    per_pixel: usize,
     per_band: G,
 ) -> (Frame, Vec<R>)
 where
-    G: Fn(usize, &[f32], &[u32]) -> R + Sync,
+    T: Send,
+    G: Fn(FrameBand<'_, T>) -> R + Sync,
     R: Send,
 {
     let (width, height) = view.size();
     let (w, h) = (width as usize, height as usize);
     // Both buffers are cleared band by band in the drawing threads; faces are stored plus
     // one (0 for none) until each band is finished.
-    let mut key = vec![0.0f32; w * h];
-    let mut face = vec![0u32; w * h];
+    let mut key = buffers::take::<f32>(w * h);
+    let mut face = buffers::take::<u32>(w * h);
     let proj = Perspective {
         view: *view,
         front: true,
@@ -110,14 +155,25 @@ where
         h,
         scratch,
         |rows| {
-            fill::split_rows(&mut key, w, rows)
+            let bands = fill::split_rows(&mut key, w, rows)
                 .into_iter()
-                .zip(fill::split_rows(&mut face, w, rows))
-                .map(|((y0, key), (_, face))| Band {
+                .zip(fill::split_rows(&mut face, w, rows));
+            let mut outs: Vec<&mut [T]> = if per_pixel == 0 {
+                Vec::new()
+            } else {
+                out.chunks_mut(w * rows * per_pixel).collect()
+            };
+            outs.resize_with(h.div_ceil(rows), Default::default);
+            bands
+                .zip(outs)
+                .map(|(((y0, key), (_, face)), out)| Band {
                     y0,
                     rows: key.len() / w.max(1),
                     width: w,
-                    sink: Ids { key, face },
+                    sink: WithOutput {
+                        ids: Ids { key, face },
+                        out,
+                    },
                 })
                 .collect()
         },
@@ -125,7 +181,10 @@ where
             // Keys to depths. The key is 1/depth from the face's plane along the pixel
             // centre's ray, rounded to f32 (6e-8 relative), so the depth is as exact as
             // an f32 depth can be, to within an ulp or two.
-            let Ids { key, face } = &mut band.sink;
+            let WithOutput {
+                ids: Ids { key, face },
+                out,
+            } = &mut band.sink;
             for (d, f) in key.iter_mut().zip(face.iter_mut()) {
                 if *f == 0 {
                     *f = NO_FACE;
@@ -135,7 +194,12 @@ where
                     *d = 1.0 / *d;
                 }
             }
-            per_band(band.y0, key, face)
+            per_band(FrameBand {
+                y0: band.y0,
+                depth: key,
+                face,
+                out,
+            })
         },
     );
     let frame = Frame {

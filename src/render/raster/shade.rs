@@ -42,7 +42,7 @@
 //! at 3, plus half a texel) covers the rest. Bodies are closed, so every occluder has a far
 //! side. One tap per pixel: shadow edges are as sharp as the map's texels.
 
-use std::sync::OnceLock;
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -53,7 +53,8 @@ use crate::render::image::RgbImage;
 use crate::render::scene::{Scene, SceneFace};
 
 use super::fill::{self, Band, Keys, Perspective, Projection, Scratch};
-use super::{NO_FACE, rasterize_with};
+use super::{Frame, NO_FACE, rasterize_with};
+use crate::render::buffers;
 
 /// How [`shaded`] draws.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,9 +66,12 @@ pub struct Shading {
     /// Whether lights cast shadows (true by default).
     pub shadows: bool,
     /// Texels on the longer side of a sun's shadow map and on the side of each of a
-    /// point light's six maps; 0 (the default) chooses from the image size: ¾ of its
-    /// longer side (between 256 and 4096) for suns, whose maps are fitted to what the
-    /// picture shows, and half of it (between 128 and 2048) for point lights.
+    /// point light's six maps, made fresh for the picture (a sun's fitted to what the
+    /// picture shows). 0 (the default) uses the maps kept with the scene
+    /// ([`ShadowCache`]: [`KEPT_SUN_SIDE`] texels over the whole scene for a sun,
+    /// [`KEPT_CUBE_SIDE`] for a point light), except that a sun whose kept map would be
+    /// coarser than [`REFIT`] times a fitted one gets a fitted map of ¾ of the picture's
+    /// longer side (between 256 and 4096 texels).
     pub shadow_map_size: u32,
 }
 
@@ -82,6 +86,90 @@ impl Default for Shading {
     }
 }
 
+/// Texels on the longer side of a sun's kept shadow map (which covers the whole scene).
+pub const KEPT_SUN_SIDE: usize = 2048;
+
+/// Texels on the side of each of the six kept shadow maps of a point light.
+pub const KEPT_CUBE_SIDE: usize = 1024;
+
+/// A sun's kept shadow map serves a picture as long as its texels are at most this many
+/// times the size of those of a map fitted to what the picture shows.
+pub const REFIT: f64 = 2.0;
+
+/// The shadow maps of a scene's own lights, made on first use and kept with the scene:
+/// they depend on the scene and the light, not on the camera, so every picture of one
+/// revision shares them. A sun's kept map covers the whole scene; a point light's is a
+/// cube around it.
+///
+/// Precondition: the scene does not change after its first shaded picture (a scene is
+/// one revision of the world); a caller that edits a scene in place calls
+/// [`ShadowCache::clear`]. A clone of a scene starts with no maps.
+#[derive(Default)]
+pub struct ShadowCache {
+    /// Per light (index into [`Scene::lights`]), its map once made.
+    kept: Mutex<Vec<(usize, Arc<OnceLock<Kept>>)>>,
+}
+
+/// A kept map: `None` when the light has nothing to shadow.
+#[derive(Clone)]
+enum Kept {
+    Sun(Option<Arc<SunMap>>),
+    Cube(Option<Arc<CubeMap>>),
+}
+
+impl ShadowCache {
+    /// The map kept for light `light`, made by `make` if it is not there yet. Two pictures
+    /// asking at once share one making.
+    fn get(&self, light: usize, make: impl FnOnce() -> Kept) -> Kept {
+        let cell = {
+            let mut kept = self.kept.lock().unwrap_or_else(PoisonError::into_inner);
+            match kept.iter().find(|(l, _)| *l == light) {
+                Some((_, cell)) => Arc::clone(cell),
+                None => {
+                    let cell = Arc::new(OnceLock::new());
+                    kept.push((light, Arc::clone(&cell)));
+                    cell
+                }
+            }
+        };
+        cell.get_or_init(make).clone()
+    }
+
+    /// How many maps are kept.
+    pub fn len(&self) -> usize {
+        let kept = self.kept.lock().unwrap_or_else(PoisonError::into_inner);
+        kept.iter().filter(|(_, cell)| cell.get().is_some()).count()
+    }
+
+    /// Whether no map is kept.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Forgets every kept map.
+    pub fn clear(&mut self) {
+        self.kept
+            .get_mut()
+            .unwrap_or_else(PoisonError::into_inner)
+            .clear();
+    }
+}
+
+impl Clone for ShadowCache {
+    /// An empty cache: maps are made again for the copy.
+    fn clone(&self) -> ShadowCache {
+        ShadowCache::default()
+    }
+}
+
+impl std::fmt::Debug for ShadowCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ShadowCache")
+            .field("maps", &self.len())
+            .finish()
+    }
+}
+
 /// The shaded picture of `scene` from `view`: see the [module documentation](self).
 ///
 /// Preconditions: `shading.ambient` is finite and non-negative (a negative or NaN value
@@ -89,40 +177,56 @@ impl Default for Shading {
 /// view's size; pixels showing no surface are `shading.background`; the others are the
 /// face's body colour lit as described.
 pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
+    shaded_with(scene, view, shading, RUN)
+}
+
+/// [`shaded`], testing runs of at least `run` pixels of one face for shadow as a whole
+/// (`usize::MAX`: every pixel on its own).
+pub(super) fn shaded_with(scene: &Scene, view: &View, shading: &Shading, run: usize) -> RgbImage {
     let (width, height) = view.size();
     let (w, h) = (width as usize, height as usize);
     if w == 0 || h == 0 {
         return RgbImage::filled(width, height, shading.background);
     }
     let rays = Rays::new(view);
-    let lights: Vec<Light> = if scene.lights.is_empty() {
-        vec![default_light(&rays)]
+    let side = w.max(h) as f64;
+    let (fit_side, cube_side) = if shading.shadow_map_size > 0 {
+        let s = shading.shadow_map_size as usize;
+        (s, s)
     } else {
-        scene.lights.iter().map(|(_, l)| *l).collect()
+        ((0.75 * side).clamp(256.0, 4096.0) as usize, KEPT_CUBE_SIDE)
     };
-    let mut lamps: Vec<Lamp> = lights
-        .iter()
-        .filter(|l| l.intensity() > 0.0)
-        .map(|l| match *l {
-            Light::Sun {
-                direction,
-                intensity,
-            } => Lamp::Sun {
-                toward: -direction,
-                intensity,
-                map: None,
-            },
-            Light::Point {
-                position,
-                intensity,
-            } => Lamp::Point {
-                position,
-                intensity,
-                map: None,
-            },
-        })
-        .collect();
-    // The suns' light-space axes, for fitting their shadow maps to what the picture shows.
+    let keep = shading.shadows && shading.shadow_map_size == 0;
+    let mut scratch = Scratch::default();
+    let mut lamps = lamps(scene, &rays);
+    if shading.shadows {
+        for (light, lamp) in &mut lamps {
+            let kept = if keep { *light } else { None };
+            match lamp {
+                Lamp::Sun { toward, map, .. } => {
+                    let direction = -*toward;
+                    let make = || Kept::Sun(SunMap::whole(scene, direction).map(Arc::new));
+                    if let Some(Kept::Sun(Some(m))) = kept.map(|l| scene.shadows.get(l, make)) {
+                        *map = Some(Sight::new(m, &rays));
+                    }
+                }
+                Lamp::Point { position, map, .. } => {
+                    let position = *position;
+                    let make = || {
+                        CubeMap::new(scene, position, cube_side, &mut Scratch::default())
+                            .map(Arc::new)
+                    };
+                    *map = match kept.map(|l| scene.shadows.get(l, || Kept::Cube(make()))) {
+                        Some(Kept::Cube(m)) => m,
+                        Some(Kept::Sun(_)) => None,
+                        None => make(),
+                    };
+                }
+            }
+        }
+    }
+    let lamps: Vec<Lamp> = lamps.into_iter().map(|(_, l)| l).collect();
+    // The suns' light-space axes, for fitting shadow maps to what the picture shows.
     let suns: Vec<Option<Axes>> = lamps
         .iter()
         .map(|l| match l {
@@ -131,92 +235,98 @@ pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
         })
         .collect();
     let fit = suns.iter().any(Option::is_some);
-    let mut scratch = Scratch::default();
-    let (frame, boxes) = rasterize_with(scene, view, &mut scratch, |y0, depth, face| {
+    // Every pixel is written below, by the bands or by the second lighting.
+    let mut data = buffers::take::<u8>(w * h * 3);
+    // With every map at hand, each band of rows is lit as soon as it is drawn, while it is
+    // in the cache; otherwise the frame is drawn first, to see what the maps must cover.
+    let ready = !lamps.iter().any(|l| l.needs_fitting(shading.shadows));
+    let lit = Lighter::new(scene, &rays, &lamps, shading, run);
+    let (frame, boxes) = rasterize_with(scene, view, &mut scratch, &mut data, 3, |band| {
+        if ready {
+            lit.rows(band.y0, w, band.depth, band.face, band.out);
+        }
         if fit {
-            footprints(&rays, &suns, y0, w, depth, face)
+            footprints(&rays, &suns, band.y0, w, band.depth, band.face)
         } else {
             Vec::new()
         }
     });
-    if shading.shadows {
-        let side = w.max(h) as f64;
-        let (sun_side, cube_side) = if shading.shadow_map_size > 0 {
-            let s = shading.shadow_map_size as usize;
-            (s, s)
-        } else {
-            (
-                (0.75 * side).clamp(256.0, 4096.0) as usize,
-                (0.5 * side).clamp(128.0, 2048.0) as usize,
-            )
+    let diag = scene.bounds.map_or(0.0, |b| (b.max - b.min).length());
+    let mut refit = !ready;
+    let mut lamps = lamps;
+    for (k, lamp) in lamps.iter_mut().enumerate() {
+        let Lamp::Sun { toward, map, .. } = lamp else {
+            continue;
         };
-        for (k, lamp) in lamps.iter_mut().enumerate() {
-            match lamp {
-                Lamp::Sun { toward, map, .. } => {
-                    let footprint = boxes
-                        .iter()
-                        .fold(EMPTY, |a, b| b.get(k).map_or(a, |b| union(a, *b)));
-                    if footprint[0] <= footprint[1] && footprint[2] <= footprint[3] {
-                        *map =
-                            SunMap::new(scene, -*toward, footprint, sun_side, &rays, &mut scratch);
-                    }
-                }
-                Lamp::Point { position, map, .. } => {
-                    *map = CubeMap::new(scene, *position, cube_side, &mut scratch);
-                }
-            }
+        if !shading.shadows {
+            continue;
+        }
+        let footprint = boxes
+            .iter()
+            .fold(EMPTY, |a, b| b.get(k).map_or(a, |b| union(a, *b)));
+        if !(footprint[0] <= footprint[1] && footprint[2] <= footprint[3]) {
+            continue;
+        }
+        let coarse = map
+            .as_ref()
+            .is_none_or(|m| m.map.texel > REFIT * fitted_texel(footprint, fit_side, diag));
+        if coarse
+            && let Some(fitted) = SunMap::new(scene, -*toward, footprint, fit_side, &mut scratch)
+        {
+            *map = Some(Sight::new(Arc::new(fitted), &rays));
+            refit = true;
         }
     }
-    let bases: Vec<[f32; 3]> = scene
-        .bodies
-        .iter()
-        .map(|b| b.color.0.map(|c| srgb_to_linear()[c as usize]))
-        .collect();
-    let encode = linear_to_srgb();
-    let ambient = shading.ambient;
-    let background = shading.background;
-    // Zeros, so fresh pages are first touched by the parallel rows.
-    let mut data = vec![0u8; w * h * 3];
-    data.par_chunks_mut(w * 3)
-        .zip(frame.face.par_chunks(w))
-        .zip(frame.depth.par_chunks(w))
-        .enumerate()
-        .for_each(|(y, ((out, faces), depths))| {
-            let py = y as f64 + 0.5;
-            let mut last = NO_FACE;
-            let mut prep = vec![(0.0, 0.0); lamps.len()];
-            let (mut n, mut base) = (DVec3::ZERO, [0.0f32; 3]);
-            for (x, (&f, &depth)) in faces.iter().zip(depths).enumerate() {
-                let o = &mut out[x * 3..x * 3 + 3];
-                if f == NO_FACE {
-                    o.copy_from_slice(&background);
-                    continue;
-                }
-                if f != last {
-                    last = f;
-                    let face = &scene.faces[f as usize];
-                    n = face.normal;
-                    base = bases[face.body as usize];
-                    for (p, lamp) in prep.iter_mut().zip(&lamps) {
-                        *p = lamp.prepare(n);
-                    }
-                }
-                let at = (x as f64 + 0.5, py, depth as f64);
-                let mut light = ambient;
-                for (lamp, &prep) in lamps.iter().zip(&prep) {
-                    light += lamp.light(&rays, at, n, prep);
-                }
-                let l = light as f32;
-                for k in 0..3 {
-                    o[k] = encode_one(encode, base[k] * l);
-                }
-            }
-        });
+    if refit {
+        Lighter::new(scene, &rays, &lamps, shading, run).frame(&frame, &mut data);
+    }
+    frame.recycle();
     RgbImage {
         width,
         height,
         data,
     }
+}
+
+/// The lamps of `scene` seen through `rays` (the default sun for a scene without
+/// lights), each with the index of its light in [`Scene::lights`], without maps yet.
+/// Lights of no intensity are left out.
+fn lamps(scene: &Scene, rays: &Rays) -> Vec<(Option<usize>, Lamp)> {
+    let lights: Vec<(Option<usize>, Light)> = if scene.lights.is_empty() {
+        vec![(None, default_light(rays))]
+    } else {
+        scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, (_, l))| (Some(i), *l))
+            .collect()
+    };
+    lights
+        .into_iter()
+        .filter(|(_, l)| l.intensity() > 0.0)
+        .map(|(i, l)| {
+            let lamp = match l {
+                Light::Sun {
+                    direction,
+                    intensity,
+                } => Lamp::Sun {
+                    toward: -direction,
+                    intensity,
+                    map: None,
+                },
+                Light::Point {
+                    position,
+                    intensity,
+                } => Lamp::Point {
+                    position,
+                    intensity,
+                    map: None,
+                },
+            };
+            (i, lamp)
+        })
+        .collect()
 }
 
 /// Pixel rays of a camera in world coordinates.
@@ -276,44 +386,67 @@ enum Lamp {
     Sun {
         toward: DVec3,
         intensity: f64,
-        map: Option<SunMap>,
+        map: Option<Sight>,
     },
     /// A point light.
     Point {
         position: DVec3,
         intensity: f64,
-        map: Option<CubeMap>,
+        map: Option<Arc<CubeMap>>,
     },
 }
 
 impl Lamp {
+    /// Whether this lamp still needs a shadow map fitted to the picture: a sun without a
+    /// map when there are shadows.
+    fn needs_fitting(&self, shadows: bool) -> bool {
+        shadows && matches!(self, Lamp::Sun { map: None, .. })
+    }
+
     /// What a face with unit normal `n` needs of this lamp at every pixel: for a sun, the
-    /// incidence cosine and the shadow bias (meters); nothing for a point light.
+    /// light it gives where it is seen (0 on a face turned away) and the shadow bias
+    /// (meters); nothing for a point light.
     #[inline]
     fn prepare(&self, n: DVec3) -> (f64, f64) {
         match self {
-            Lamp::Sun { toward, map, .. } => {
+            Lamp::Sun {
+                toward,
+                intensity,
+                map,
+            } => {
                 let nl = n.dot(*toward);
-                let bias = match map {
-                    Some(m) if nl > 0.0 => m.texel * bias_texels(nl) + m.eps,
-                    _ => 0.0,
-                };
-                (nl, bias)
+                if nl <= 0.0 {
+                    return (0.0, 0.0);
+                }
+                let bias = map
+                    .as_ref()
+                    .map_or(0.0, |m| m.map.texel * bias_texels(nl) + m.map.eps);
+                (nl * intensity, bias)
             }
             Lamp::Point { .. } => (0.0, 0.0),
+        }
+    }
+
+    /// Whether this lamp, a sun, sees the surface shown at `at` = (u, v, depth), allowing
+    /// `bias` meters; true for a point light (see [`Lamp::light`]).
+    #[inline]
+    fn sees(&self, at: (f64, f64, f64), bias: f64) -> bool {
+        match self {
+            Lamp::Sun { map, .. } => map.as_ref().is_none_or(|m| m.lit_at(at, bias)),
+            Lamp::Point { .. } => true,
         }
     }
 
     /// The light this lamp gives the surface with unit normal `n` seen at depth `d` at
     /// pixel coordinates (`u`, `v`) (`at` = (u, v, d)); `prep` is [`Lamp::prepare`] of `n`.
     #[inline]
-    fn light(&self, rays: &Rays, at: (f64, f64, f64), n: DVec3, (nl, bias): (f64, f64)) -> f64 {
+    fn light(&self, rays: &Rays, at: (f64, f64, f64), n: DVec3, (gain, bias): (f64, f64)) -> f64 {
         match self {
-            Lamp::Sun { intensity, map, .. } => {
-                if nl <= 0.0 || map.as_ref().is_some_and(|m| !m.lit_at(at, bias)) {
-                    0.0
+            Lamp::Sun { .. } => {
+                if gain > 0.0 && self.sees(at, bias) {
+                    gain
                 } else {
-                    nl * intensity
+                    0.0
                 }
             }
             Lamp::Point {
@@ -335,6 +468,242 @@ impl Lamp {
                 }
             }
         }
+    }
+}
+
+/// At most this many suns (and no point light) are lit through a per-face palette.
+const PALETTE_SUNS: usize = 4;
+
+/// Lights the pixels of a frame: see the [module documentation](self).
+struct Lighter<'a> {
+    scene: &'a Scene,
+    rays: &'a Rays,
+    lamps: &'a [Lamp],
+    /// Each scene body's colour in linear light.
+    bases: Vec<[f32; 3]>,
+    ambient: f64,
+    background: [u8; 3],
+    encode: &'static [u8],
+    /// Every lamp is a sun, at most [`PALETTE_SUNS`] of them: a face's colour for each
+    /// set of suns that see a pixel is computed once per run of the face's pixels.
+    palette: bool,
+    /// Runs of a face's pixels at least this long are tested for shadow as a whole.
+    run: usize,
+}
+
+impl<'a> Lighter<'a> {
+    fn new(
+        scene: &'a Scene,
+        rays: &'a Rays,
+        lamps: &'a [Lamp],
+        shading: &Shading,
+        run: usize,
+    ) -> Self {
+        Lighter {
+            scene,
+            rays,
+            lamps,
+            bases: scene
+                .bodies
+                .iter()
+                .map(|b| b.color.0.map(|c| srgb_to_linear()[c as usize]))
+                .collect(),
+            ambient: shading.ambient,
+            background: shading.background,
+            encode: linear_to_srgb(),
+            palette: lamps.len() <= PALETTE_SUNS
+                && lamps.iter().all(|l| matches!(l, Lamp::Sun { .. })),
+            run,
+        }
+    }
+
+    /// Lights every pixel of `frame` into `data` (RGB, the frame's size), in parallel
+    /// bands of rows.
+    fn frame(&self, frame: &Frame, data: &mut [u8]) {
+        let w = frame.width as usize;
+        let rows = 16;
+        data.par_chunks_mut(w * 3 * rows)
+            .zip(frame.face.par_chunks(w * rows))
+            .zip(frame.depth.par_chunks(w * rows))
+            .enumerate()
+            .for_each(|(b, ((out, faces), depths))| self.rows(b * rows, w, depths, faces, out));
+    }
+
+    /// Lights rows from `y0`, `width` pixels wide, of depths `depth` and faces `face`,
+    /// into `out` (RGB).
+    fn rows(&self, y0: usize, width: usize, depth: &[f32], face: &[u32], out: &mut [u8]) {
+        let mut palettes = self.palette.then(Palettes::new);
+        for (r, ((depths, faces), out)) in depth
+            .chunks(width)
+            .zip(face.chunks(width))
+            .zip(out.chunks_mut(width * 3))
+            .enumerate()
+        {
+            let py = (y0 + r) as f64 + 0.5;
+            match &mut palettes {
+                Some(p) => self.row_of_suns(py, depths, faces, out, p),
+                None => self.row(py, depths, faces, out),
+            }
+        }
+    }
+
+    /// Lights one row, at pixel-coordinate height `py`, lamp by lamp.
+    fn row(&self, py: f64, depths: &[f32], faces: &[u32], out: &mut [u8]) {
+        let mut last = NO_FACE;
+        let mut prep = vec![(0.0, 0.0); self.lamps.len()];
+        let (mut n, mut base) = (DVec3::ZERO, [0.0f32; 3]);
+        for (x, ((&f, &depth), o)) in faces
+            .iter()
+            .zip(depths)
+            .zip(out.chunks_exact_mut(3))
+            .enumerate()
+        {
+            if f == NO_FACE {
+                o.copy_from_slice(&self.background);
+                continue;
+            }
+            if f != last {
+                last = f;
+                let face = &self.scene.faces[f as usize];
+                n = face.normal;
+                base = self.bases[face.body as usize];
+                for (p, lamp) in prep.iter_mut().zip(self.lamps) {
+                    *p = lamp.prepare(n);
+                }
+            }
+            let at = (x as f64 + 0.5, py, depth as f64);
+            let mut light = self.ambient;
+            for (lamp, &prep) in self.lamps.iter().zip(&prep) {
+                light += lamp.light(self.rays, at, n, prep);
+            }
+            let l = light as f32;
+            for k in 0..3 {
+                o[k] = encode_one(self.encode, base[k] * l);
+            }
+        }
+    }
+
+    /// [`Lighter::row`] when every lamp is a sun: per pixel only the shadow tests, whose
+    /// outcome picks the face's colour from its palette (kept in `palettes` for the rows
+    /// that follow).
+    fn row_of_suns(
+        &self,
+        py: f64,
+        depths: &[f32],
+        faces: &[u32],
+        out: &mut [u8],
+        palettes: &mut Palettes,
+    ) {
+        let mut x = 0;
+        while x < faces.len() {
+            let f = faces[x];
+            let mut end = x + 1;
+            while end < faces.len() && faces[end] == f {
+                end += 1;
+            }
+            let run = &mut out[x * 3..end * 3];
+            if f == NO_FACE {
+                run.chunks_exact_mut(3)
+                    .for_each(|o| o.copy_from_slice(&self.background));
+                x = end;
+                continue;
+            }
+            let slot = palettes.slot(self, f);
+            let prep = &palettes.prep[slot];
+            // Suns known to see the whole run, and those to be asked pixel by pixel.
+            let (mut seen, mut ask) = (0usize, 0usize);
+            let first = (x as f64 + 0.5, py, depths[x] as f64);
+            let last = ((end - 1) as f64 + 0.5, py, depths[end - 1] as f64);
+            for (k, (lamp, &(gain, bias))) in self.lamps.iter().zip(prep).enumerate() {
+                if gain <= 0.0 {
+                    continue;
+                }
+                let whole = match lamp {
+                    Lamp::Sun { map: Some(m), .. } if end - x >= self.run => {
+                        m.run(first, last, bias)
+                    }
+                    Lamp::Sun { map: Some(_), .. } => None,
+                    _ => Some(true),
+                };
+                match whole {
+                    Some(true) => seen |= 1 << k,
+                    Some(false) => {}
+                    None => ask |= 1 << k,
+                }
+            }
+            let colours = &palettes.colour[slot];
+            if ask == 0 {
+                let c = colours[seen];
+                run.chunks_exact_mut(3).for_each(|o| o.copy_from_slice(&c));
+            } else {
+                for (i, o) in run.chunks_exact_mut(3).enumerate() {
+                    let at = ((x + i) as f64 + 0.5, py, depths[x + i] as f64);
+                    let mut mask = seen;
+                    for (k, (lamp, &(_, bias))) in self.lamps.iter().zip(prep).enumerate() {
+                        if ask & (1 << k) != 0 && lamp.sees(at, bias) {
+                            mask |= 1 << k;
+                        }
+                    }
+                    o.copy_from_slice(&colours[mask]);
+                }
+            }
+            x = end;
+        }
+    }
+}
+
+/// Runs of at least this many pixels of one face are first tested for shadow as a whole
+/// ([`Sight::run`]).
+const RUN: usize = 6;
+
+/// Faces' palettes, kept while a band of rows is lit: direct-mapped by face index.
+struct Palettes {
+    /// The face in each slot, [`NO_FACE`] for none.
+    face: Vec<u32>,
+    /// Each sun's [`Lamp::prepare`] for the slot's face.
+    prep: Vec<[(f64, f64); PALETTE_SUNS]>,
+    /// The face's colour for each set of suns that see it (bit k for sun k).
+    colour: Vec<[[u8; 3]; 1 << PALETTE_SUNS]>,
+}
+
+impl Palettes {
+    /// Slots kept.
+    const SLOTS: usize = 1024;
+
+    fn new() -> Palettes {
+        Palettes {
+            face: vec![NO_FACE; Self::SLOTS],
+            prep: vec![[(0.0, 0.0); PALETTE_SUNS]; Self::SLOTS],
+            colour: vec![[[0; 3]; 1 << PALETTE_SUNS]; Self::SLOTS],
+        }
+    }
+
+    /// The slot holding face `f`'s palette, made for `lighter` if it is not there.
+    #[inline]
+    fn slot(&mut self, lighter: &Lighter<'_>, f: u32) -> usize {
+        let slot = f as usize % Self::SLOTS;
+        if self.face[slot] != f {
+            self.face[slot] = f;
+            let face = &lighter.scene.faces[f as usize];
+            let base = lighter.bases[face.body as usize];
+            let prep = &mut self.prep[slot];
+            for (p, lamp) in prep.iter_mut().zip(lighter.lamps) {
+                *p = lamp.prepare(face.normal);
+            }
+            // Light per set of suns, each from the set without its highest sun.
+            let suns = lighter.lamps.len();
+            let mut light = [0.0f64; 1 << PALETTE_SUNS];
+            light[0] = lighter.ambient;
+            for mask in 1..1usize << suns {
+                let high = usize::BITS - 1 - mask.leading_zeros();
+                light[mask] = light[mask & !(1 << high)] + prep[high as usize].0;
+            }
+            for (colour, &l) in self.colour[slot].iter_mut().zip(&light).take(1 << suns) {
+                let l = l as f32;
+                *colour = base.map(|c| encode_one(lighter.encode, c * l));
+            }
+        }
+        slot
     }
 }
 
@@ -433,6 +802,19 @@ fn sun_axes(direction: DVec3) -> (DVec3, DVec3) {
     direction.any_orthonormal_pair()
 }
 
+/// Texels at the edge of a sun's map, around its footprint.
+const PAD: f64 = 2.0;
+
+/// The texel side (meters) of a sun map `side` texels long over light-space box
+/// `footprint`, in a scene whose bounds' diagonal is `diag`.
+fn fitted_texel(footprint: [f64; 4], side: usize, diag: f64) -> f64 {
+    let extent = (footprint[1] - footprint[0])
+        .max(footprint[3] - footprint[2])
+        .max(diag * 1e-9)
+        .max(1e-9);
+    extent / (side.max(8) as f64 - 2.0 * PAD)
+}
+
 /// An orthographic view along a sun's rays: pixel (u, v) is light-space
 /// ((u/scale + x0)·s + (v/scale + y0)·t); the key is `zc − w·p` (nearer the sun larger,
 /// and positive for every point of the scene).
@@ -476,32 +858,70 @@ impl Projection for Ortho {
     }
 }
 
+/// Texels on the side of a square tile of a sun map's storage.
+const TILE: usize = 8;
+
 /// A sun's shadow map.
 struct SunMap {
     width: usize,
     height: usize,
-    /// Keys of the nearest far-side surface per texel; 0 where none.
-    key: Vec<f32>,
+    /// Keys of the nearest far-side surface per texel in units of `unit` meters, rounded
+    /// down (so never nearer the sun than the surface); 0 where none. Stored in [`TILE`] ×
+    /// [`TILE`] tiles, row-major within a tile and tiles row-major (see [`SunMap::at`]),
+    /// so that the texels a picture's row looks up, which run along a line through the
+    /// map in any direction, share cache lines.
+    key: Vec<u16>,
+    /// Meters per key unit.
+    unit: f64,
+    /// Maxima and minima of the keys over blocks of texels.
+    pyramid: Pyramid,
+    /// Tiles per row of tiles.
+    tiles: usize,
     /// Texel side, meters.
     texel: f64,
     /// Constant bias, meters (covers the f32 keys' rounding).
     eps: f64,
-    /// For the picture's pixels: texel u, texel v and key of the point at depth d on the
-    /// ray through pixel coordinates (x, y), each `c + d·(d0 + x·dx + y·dy)` with
-    /// `[c, d0, dx, dy]` from here (see [`SunMap::lit_at`]).
-    camera: [[f64; 4]; 3],
+    /// Where the map looks from.
+    view: Ortho,
 }
 
 impl SunMap {
+    /// The map of the sun shining along unit `direction` over the whole scene,
+    /// [`KEPT_SUN_SIDE`] texels on its longer side. `None` for a scene without geometry.
+    fn whole(scene: &Scene, direction: DVec3) -> Option<SunMap> {
+        let axes = Axes::new(-direction);
+        let footprint = scene
+            .points
+            .par_iter()
+            .with_min_len(4096)
+            .fold(
+                || EMPTY,
+                |b, p| {
+                    let (u, v) = (axes.s.dot(*p), axes.t.dot(*p));
+                    union(b, [u, u, v, v])
+                },
+            )
+            .reduce(|| EMPTY, union);
+        if !(footprint[0] <= footprint[1] && footprint[2] <= footprint[3]) {
+            return None;
+        }
+        SunMap::new(
+            scene,
+            direction,
+            footprint,
+            KEPT_SUN_SIDE,
+            &mut Scratch::default(),
+        )
+    }
+
     /// The map of the sun shining along unit `direction` over the light-space box
-    /// `footprint` of its receivers, `side` texels on its longer side, for the picture
-    /// whose pixel rays are `rays`. `None` for a scene without geometry.
+    /// `footprint` of its receivers, `side` texels on its longer side. `None` for a scene
+    /// without geometry.
     fn new(
         scene: &Scene,
         direction: DVec3,
         footprint: [f64; 4],
         side: usize,
-        rays: &Rays,
         scratch: &mut Scratch,
     ) -> Option<SunMap> {
         let bounds = scene.bounds?;
@@ -511,39 +931,22 @@ impl SunMap {
         // texel left at zero holds nothing.
         let zc = direction.dot((bounds.min + bounds.max) / 2.0) + 0.5 * diag + 1e-3 * diag + 1e-6;
         let side = side.max(8);
-        let pad = 2.0;
-        let extent = (footprint[1] - footprint[0])
-            .max(footprint[3] - footprint[2])
-            .max(diag * 1e-9)
-            .max(1e-9);
-        let texel = extent / (side as f64 - 2.0 * pad);
-        let width = (((footprint[1] - footprint[0]) / texel).ceil() as usize + 2 * pad as usize)
+        let texel = fitted_texel(footprint, side, diag);
+        let width = (((footprint[1] - footprint[0]) / texel).ceil() as usize + 2 * PAD as usize)
             .clamp(1, side);
-        let height = (((footprint[3] - footprint[2]) / texel).ceil() as usize + 2 * pad as usize)
+        let height = (((footprint[3] - footprint[2]) / texel).ceil() as usize + 2 * PAD as usize)
             .clamp(1, side);
         let view = Ortho {
             s,
             t,
             w: direction,
-            x0: footprint[0] - pad * texel,
-            y0: footprint[2] - pad * texel,
+            x0: footprint[0] - PAD * texel,
+            y0: footprint[2] - PAD * texel,
             scale: 1.0 / texel,
             zc,
         };
-        let mut key = vec![0.0f32; width * height];
-        let rows = |a: DVec3, c: f64, k: f64| {
-            [
-                c,
-                k * a.dot(rays.d0),
-                k * a.dot(rays.du),
-                k * a.dot(rays.dv),
-            ]
-        };
-        let camera = [
-            rows(s, (s.dot(rays.eye) - view.x0) * view.scale, view.scale),
-            rows(t, (t.dot(rays.eye) - view.y0) * view.scale, view.scale),
-            rows(direction, zc - direction.dot(rays.eye), -1.0),
-        ];
+        // Cleared band by band while drawing.
+        let mut key = buffers::take::<f32>(width * height);
         fill::draw(
             scene,
             &view,
@@ -563,28 +966,256 @@ impl SunMap {
             },
             |_| (),
         );
-        Some(SunMap {
+        // Every key is below zc + diag (the nearest point to the sun is at most a diagonal
+        // from the far end) and above 1e-3·diag (zc's margin), so above 65 units: a
+        // surface never rounds to 0.
+        let unit = (zc - direction.dot((bounds.min + bounds.max) / 2.0) + 0.5 * diag) / 65535.0;
+        let (tiles, tiled) = tile(&key, width, height, unit);
+        buffers::give(key);
+        let mut map = SunMap {
             width,
             height,
-            key,
+            key: tiled,
+            unit,
+            pyramid: Pyramid::default(),
+            tiles,
             texel,
-            eps: diag * 2e-6,
-            camera,
-        })
+            eps: diag * 2e-6 + unit,
+            view,
+        };
+        map.pyramid = Pyramid::new(&map);
+        Some(map)
+    }
+
+    /// The key at texel (`u`, `v`) in key units. Precondition: inside the map.
+    #[inline(always)]
+    fn units_at(&self, u: usize, v: usize) -> u16 {
+        let tile = (v / TILE) * self.tiles + u / TILE;
+        self.key[tile * TILE * TILE + (v % TILE) * TILE + u % TILE]
+    }
+
+    /// The key at texel (`u`, `v`), meters. Precondition: inside the map.
+    #[inline(always)]
+    fn at(&self, u: usize, v: usize) -> f64 {
+        self.units_at(u, v) as f64 * self.unit
+    }
+}
+
+impl Drop for SunMap {
+    fn drop(&mut self) {
+        buffers::give(std::mem::take(&mut self.key));
+    }
+}
+
+/// The maxima and minima of a sun map's keys (in key units) over square blocks of
+/// 2, 4, 8, … texels on a side: level ℓ holds blocks of 2^(ℓ+1). Texels beyond the map's
+/// edge count as 0 (nothing there).
+#[derive(Default)]
+struct Pyramid {
+    levels: Vec<Level>,
+}
+
+/// One level of a [`Pyramid`]: per block, row-major, the largest and smallest key.
+struct Level {
+    width: usize,
+    height: usize,
+    max: Vec<u16>,
+    min: Vec<u16>,
+}
+
+impl Pyramid {
+    /// The pyramid of `map`, up to a single block.
+    fn new(map: &SunMap) -> Pyramid {
+        let mut levels: Vec<Level> = Vec::new();
+        let (mut w, mut h) = (map.width, map.height);
+        while w > 1 || h > 1 {
+            let (nw, nh) = (w.div_ceil(2), h.div_ceil(2));
+            let below = levels.last();
+            let read = |u: usize, v: usize| -> (u16, u16) {
+                if u >= w || v >= h {
+                    return (0, 0);
+                }
+                match below {
+                    Some(l) => (l.max[v * w + u], l.min[v * w + u]),
+                    None => {
+                        let k = map.units_at(u, v);
+                        (k, k)
+                    }
+                }
+            };
+            let mut max = vec![0u16; nw * nh];
+            let mut min = vec![0u16; nw * nh];
+            max.par_chunks_mut(nw)
+                .zip(min.par_chunks_mut(nw))
+                .enumerate()
+                .for_each(|(y, (max, min))| {
+                    for x in 0..nw {
+                        let four = [
+                            read(2 * x, 2 * y),
+                            read(2 * x + 1, 2 * y),
+                            read(2 * x, 2 * y + 1),
+                            read(2 * x + 1, 2 * y + 1),
+                        ];
+                        max[x] = four.iter().map(|k| k.0).max().unwrap_or(0);
+                        min[x] = four.iter().map(|k| k.1).min().unwrap_or(0);
+                    }
+                });
+            levels.push(Level {
+                width: nw,
+                height: nh,
+                max,
+                min,
+            });
+            (w, h) = (nw, nh);
+        }
+        Pyramid { levels }
+    }
+
+    /// The largest and the smallest key (key units) over a set of texels covering the box
+    /// `[u0, u1, v0, v1]` (inclusive texel indices inside `map`): at most 2 × 2 blocks
+    /// of the finest level that covers it so, or the box's own texels when they are at
+    /// most 2 × 2.
+    #[inline]
+    fn range(&self, map: &SunMap, [u0, u1, v0, v1]: [usize; 4]) -> (u16, u16) {
+        let (mut hi, mut lo) = (0u16, u16::MAX);
+        if u1 - u0 <= 1 && v1 - v0 <= 1 {
+            for v in v0..=v1 {
+                for u in u0..=u1 {
+                    let k = map.units_at(u, v);
+                    (hi, lo) = (hi.max(k), lo.min(k));
+                }
+            }
+            return (hi, lo);
+        }
+        let mut shift = 1;
+        while ((u1 >> shift) - (u0 >> shift) > 1 || (v1 >> shift) - (v0 >> shift) > 1)
+            && shift < self.levels.len()
+        {
+            shift += 1;
+        }
+        let Some(level) = self.levels.get(shift - 1) else {
+            return (u16::MAX, 0);
+        };
+        for v in (v0 >> shift)..=(v1 >> shift).min(level.height - 1) {
+            for u in (u0 >> shift)..=(u1 >> shift).min(level.width - 1) {
+                let i = v * level.width + u;
+                (hi, lo) = (hi.max(level.max[i]), lo.min(level.min[i]));
+            }
+        }
+        (hi, lo)
+    }
+}
+
+/// A row-major `width × height` raster of keys (meters) in units of `unit`, rounded down
+/// and saturating at 65535, laid out in [`TILE`] × [`TILE`] tiles (the edge tiles padded
+/// with values never read): tiles per row, and the tiled values.
+fn tile(key: &[f32], width: usize, height: usize, unit: f64) -> (usize, Vec<u16>) {
+    let tiles = width.div_ceil(TILE);
+    let per_unit = (1.0 / unit) as f32;
+    // The padding of the edge tiles is never read.
+    let mut out = buffers::take::<u16>(tiles * height.div_ceil(TILE) * TILE * TILE);
+    out.par_chunks_mut(tiles * TILE * TILE)
+        .enumerate()
+        .for_each(|(ty, strip)| {
+            for r in 0..TILE {
+                let v = ty * TILE + r;
+                if v >= height {
+                    break;
+                }
+                let row = &key[v * width..(v + 1) * width];
+                for (tx, chunk) in row.chunks(TILE).enumerate() {
+                    let at = tx * TILE * TILE + r * TILE;
+                    for (o, &k) in strip[at..at + chunk.len()].iter_mut().zip(chunk) {
+                        // Float-to-integer casts floor positive values and saturate.
+                        *o = (k * per_unit) as u16;
+                    }
+                }
+            }
+        });
+    (tiles, out)
+}
+
+/// A sun map as one picture uses it.
+struct Sight {
+    map: Arc<SunMap>,
+    /// For the picture's pixels: texel u, texel v and key of the point at depth d on the
+    /// ray through pixel coordinates (x, y), each `c + d·(d0 + x·dx + y·dy)` with
+    /// `[c, d0, dx, dy]` from here (see [`Sight::lit_at`]).
+    camera: [[f64; 4]; 3],
+}
+
+impl Sight {
+    /// `map` for the picture whose pixel rays are `rays`.
+    fn new(map: Arc<SunMap>, rays: &Rays) -> Sight {
+        let o = map.view;
+        let rows = |a: DVec3, c: f64, k: f64| {
+            [
+                c,
+                k * a.dot(rays.d0),
+                k * a.dot(rays.du),
+                k * a.dot(rays.dv),
+            ]
+        };
+        let camera = [
+            rows(o.s, (o.s.dot(rays.eye) - o.x0) * o.scale, o.scale),
+            rows(o.t, (o.t.dot(rays.eye) - o.y0) * o.scale, o.scale),
+            rows(o.w, o.zc - o.w.dot(rays.eye), -1.0),
+        ];
+        Sight { map, camera }
+    }
+
+    /// Texel coordinates (u, v) and key (meters) of the point the picture shows at
+    /// `at` = (x, y, depth).
+    #[inline(always)]
+    fn project(&self, (x, y, d): (f64, f64, f64)) -> [f64; 3] {
+        self.camera
+            .map(|[c, d0, dx, dy]| c + d * (d0 + x * dx + y * dy))
+    }
+
+    /// Whether the sun sees every pixel of a run of one face's pixels along a row, from
+    /// `first` to `last` (each (x, y, depth)), allowing `bias` meters: `Some(true)` if it
+    /// sees them all, `Some(false)` if it sees none, `None` when they must be asked one by
+    /// one ([`Sight::lit_at`], whose answers these agree with).
+    ///
+    /// The run's points lie on a segment of the face, which the map sees as a segment
+    /// from texel `first` to texel `last`, with keys between those of the ends. So if no
+    /// key of the map in a box around that segment ([`Pyramid`]) is nearer the sun than
+    /// the nearest point (with the bias), every pixel is lit; if every texel in it holds a
+    /// key nearer than the farthest point, none is.
+    #[inline]
+    fn run(&self, first: (f64, f64, f64), last: (f64, f64, f64), bias: f64) -> Option<bool> {
+        let [ua, va, ka] = self.project(first);
+        let [ub, vb, kb] = self.project(last);
+        let m = &*self.map;
+        let (w, h) = (m.width as f64, m.height as f64);
+        let (u0, u1) = (ua.min(ub), ua.max(ub));
+        let (v0, v1) = (va.min(vb), va.max(vb));
+        // Also false for NaN: then ask pixel by pixel.
+        if !(u0 >= 0.0 && v0 >= 0.0 && u1 < w && v1 < h && (ka + kb).is_finite()) {
+            return None;
+        }
+        let (hi, lo) = m
+            .pyramid
+            .range(m, [u0 as usize, u1 as usize, v0 as usize, v1 as usize]);
+        if hi as f64 * m.unit <= ka.min(kb) + bias {
+            Some(true)
+        } else if lo as f64 * m.unit > ka.max(kb) + bias {
+            Some(false)
+        } else {
+            None
+        }
     }
 
     /// Whether the sun sees the point the picture shows at `at` = (x, y, depth), allowing
     /// `bias` meters toward the sun.
     #[inline]
-    fn lit_at(&self, (x, y, d): (f64, f64, f64), bias: f64) -> bool {
-        let [u, v, key] = self
-            .camera
-            .map(|[c, d0, dx, dy]| c + d * (d0 + x * dx + y * dy));
-        if !(u >= 0.0 && v >= 0.0 && u < self.width as f64 && v < self.height as f64) {
+    fn lit_at(&self, at: (f64, f64, f64), bias: f64) -> bool {
+        let [u, v, key] = self.project(at);
+        let m = &*self.map;
+        if !(u >= 0.0 && v >= 0.0 && u < m.width as f64 && v < m.height as f64) {
             return true;
         }
-        let k = self.key[v as usize * self.width + u as usize] as f64;
-        k <= key + bias
+        m.at(u as usize, v as usize) <= key + bias
     }
 }
 
@@ -598,6 +1229,12 @@ struct CubeMap {
     keys: Vec<Vec<f32>>,
     /// Constant bias, meters.
     eps: f64,
+}
+
+impl Drop for CubeMap {
+    fn drop(&mut self) {
+        self.keys.drain(..).for_each(buffers::give);
+    }
 }
 
 impl CubeMap {
@@ -623,7 +1260,8 @@ impl CubeMap {
         let keys = views
             .iter()
             .map(|view| {
-                let mut key = vec![0.0f32; side * side];
+                // Cleared band by band while drawing.
+                let mut key = buffers::take::<f32>(side * side);
                 let proj = Perspective {
                     view: *view,
                     front: false,

@@ -276,6 +276,114 @@ fn a_cube_in_the_shadow_of_a_slab_is_darker_than_in_the_open() {
     assert_all_near(&shade, &top, testing::lit(color, 0.25));
 }
 
+/// How many pixels of `a` and `b` differ by more than 2 in some channel.
+fn differing(a: &RgbImage, b: &RgbImage) -> usize {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    a.data
+        .chunks(3)
+        .zip(b.data.chunks(3))
+        .filter(|(p, q)| p.iter().zip(*q).any(|(x, y)| x.abs_diff(*y) > 2))
+        .count()
+}
+
+#[test]
+fn testing_runs_of_pixels_as_a_whole_gives_the_pixel_by_pixel_picture() {
+    // Blocks standing on a floor, which takes most of their shadows.
+    let mut world = crate::render::sample::blocks(400, 3).unwrap();
+    let side = crate::render::sample::blocks_extent(400) + 10.0;
+    let root = world.root();
+    world
+        .insert_with(
+            None,
+            root,
+            Pose::from_translation(DVec3::new(0.0, 0.0, -0.1)),
+            |s| solids::mkcube(s, side, side, 0.2),
+        )
+        .unwrap();
+    let scene = Scene::build(&world);
+    for cam in crate::render::sample::ring_cameras(400, 4, 320, 240) {
+        let view = View::new(&cam, DEFAULT_NEAR);
+        let whole = shade::shaded_with(&scene, &view, &Shading::default(), 2);
+        let each = shade::shaded_with(&scene, &view, &Shading::default(), usize::MAX);
+        // Shadows are there to be tested.
+        let open = Shading {
+            shadows: false,
+            ..Shading::default()
+        };
+        let shadowed = differing(&each, &shaded(&scene, &view, &open));
+        assert!(shadowed > 1000, "only {shadowed} pixels in shadow");
+        assert_eq!(differing(&whole, &each), 0);
+    }
+}
+
+#[test]
+fn kept_shadow_maps_are_made_once_and_agree_with_fresh_ones() {
+    let world = crate::render::sample::blocks(200, 5).unwrap();
+    let scene = Scene::build(&world);
+    let suns = scene.lights.len();
+    assert!(suns >= 1);
+    assert!(scene.shadows.is_empty());
+    let cams = crate::render::sample::ring_cameras(200, 3, 320, 240);
+    let views: Vec<View> = cams.iter().map(|c| View::new(c, DEFAULT_NEAR)).collect();
+    let first: Vec<RgbImage> = views
+        .iter()
+        .map(|v| shaded(&scene, v, &Shading::default()))
+        .collect();
+    assert_eq!(scene.shadows.len(), suns);
+    for (v, img) in views.iter().zip(&first) {
+        assert_eq!(&shaded(&scene, v, &Shading::default()), img);
+        // Maps fitted to the picture, made fresh: the same shadows up to the texels.
+        let fresh = Shading {
+            shadow_map_size: 1024,
+            ..Shading::default()
+        };
+        let differ = differing(&shaded(&scene, v, &fresh), img);
+        assert!(
+            differ * 100 < img.data.len() / 3,
+            "{differ} pixels differ with fresh maps"
+        );
+    }
+    assert_eq!(scene.shadows.len(), suns);
+    let mut copy = scene.clone();
+    assert!(copy.shadows.is_empty());
+    shaded(&copy, &views[0], &Shading::default());
+    assert_eq!(copy.shadows.len(), suns);
+    copy.shadows.clear();
+    assert!(copy.shadows.is_empty());
+}
+
+#[test]
+fn a_close_up_of_a_large_world_gets_a_sun_map_fitted_to_it() {
+    // The cube under the slab of `under_slab`, with a block 2 km away behind the camera:
+    // the map kept for the whole world has texels of a metre, too coarse for the picture.
+    let sun = Light::sun(DVec3::new(0.1, 0.05, -1.0), 0.9).unwrap();
+    let (mut world, ids) = boxes(&[
+        (Pose::IDENTITY, [1.0, 1.0, 1.0]),
+        (
+            Pose::from_translation(DVec3::new(0.0, 0.0, 3.0)),
+            [6.0, 6.0, 0.2],
+        ),
+        (
+            Pose::from_translation(DVec3::new(1500.0, -1500.0, 0.0)),
+            [10.0, 10.0, 1.0],
+        ),
+    ]);
+    world.set_light("light", sun).unwrap();
+    let scene = Scene::build(&world);
+    let k = Intrinsics::centered(160, 120, 150.0).unwrap();
+    let (_, view) = view(DVec3::new(4.0, -3.5, 1.2), DVec3::ZERO, DVec3::Z, k);
+    let img = shaded(&scene, &view, &Shading::default());
+    // Exactly the picture made with a fresh map fitted to it (¾ of 160, at least 256).
+    let fitted = Shading {
+        shadow_map_size: 256,
+        ..Shading::default()
+    };
+    assert_eq!(differing(&img, &shaded(&scene, &view, &fitted)), 0);
+    let frame = rasterize(&scene, &view);
+    let top = face_pixels(&scene, &frame, ids[0], DVec3::Z);
+    assert_all_near(&img, &top, testing::lit(scene.bodies[0].color.0, 0.25));
+}
+
 #[test]
 fn a_point_light_above_a_slab_leaves_the_cube_in_shadow() {
     let lamp = Light::point(DVec3::new(0.2, 0.1, 6.0), 30.0).unwrap();

@@ -397,7 +397,11 @@ fn encode(scene: &Scene, picture: Picture, format: Format, options: &Options) ->
         headers,
     };
     match picture {
-        Picture::Rgb(image) => png(image.to_png(), Vec::new()),
+        Picture::Rgb(image) => {
+            let body = image.to_png();
+            image.recycle();
+            png(body, Vec::new())
+        }
         Picture::Depth {
             image,
             meters_per_unit,
