@@ -88,32 +88,36 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let view = |c: &Camera| View::new(c, DEFAULT_NEAR);
         let zbuf = time(&cameras, |c| {
-            std::hint::black_box(raster::rasterize(&scene, &view(c)));
+            std::hint::black_box(raster::rasterize(&scene, &view(c))).recycle();
         });
         // The first picture of a revision makes the lights' shadow maps; later ones reuse
         // them.
         let first = time(&cameras, |c| {
             scene.shadows.clear();
-            std::hint::black_box(raster::shaded(&scene, &view(c), &shading));
+            std::hint::black_box(raster::shaded(&scene, &view(c), &shading)).recycle();
         });
         let shaded = time(&cameras, |c| {
-            std::hint::black_box(raster::shaded(&scene, &view(c), &shading));
+            std::hint::black_box(raster::shaded(&scene, &view(c), &shading)).recycle();
         });
         let shaded_png = time(&cameras, |c| {
-            std::hint::black_box(raster::shaded(&scene, &view(c), &shading).to_png());
+            let image = raster::shaded(&scene, &view(c), &shading);
+            std::hint::black_box(image.to_png());
+            image.recycle();
         });
         let unshadowed = time(&cameras, |c| {
-            std::hint::black_box(raster::shaded(&scene, &view(c), &flat));
+            std::hint::black_box(raster::shaded(&scene, &view(c), &flat)).recycle();
         });
         let depth = time(&cameras, |c| {
             let f = raster::rasterize(&scene, &view(c));
             std::hint::black_box(raster::depth_image(&f, 0.001).to_png());
+            f.recycle();
         });
         let ids = time(&cameras, |c| {
             let f = raster::rasterize(&scene, &view(c));
             if let Ok((img, _)) = raster::ids_image(&scene, &f) {
                 std::hint::black_box(img.to_png());
             }
+            f.recycle();
         });
         let wire = time(&cameras, |c| {
             std::hint::black_box(raster::wire(&scene, &view(c), [255; 3], [0; 3]));

@@ -20,7 +20,7 @@
 //! [`ShadowCache`]); any number of cameras can render the same scene at once.
 
 mod fill;
-mod shade;
+pub mod shade;
 #[cfg(test)]
 mod tests;
 

@@ -27,13 +27,16 @@
 //!
 //! # Shadows
 //!
-//! Each light gets a shadow map, made fresh for each picture:
+//! Each light has a shadow map:
 //!
-//! * a sun, an orthographic depth map looking along its direction, fitted to the part of
-//!   the world the picture shows (the light-space footprint of the visible lit pixels), so
-//!   its texels are as fine as the picture needs; [`Shading::shadow_map_size`] texels on
-//!   its longer side;
-//! * a point light, a cube of six 90° perspective maps around it.
+//! * a sun, an orthographic depth map looking along its direction. The map of each of the
+//!   world's suns covers the whole scene, [`KEPT_SUN_SIDE`] texels on its longer side, and
+//!   is kept with the scene ([`ShadowCache`]): it depends on the scene and the light, not
+//!   on the camera, so it is made by the first picture of a revision and shared by all
+//!   the others. A picture that shows only a small part of the world (its texels would be
+//!   more than [`REFIT`] times those of a map fitted to the light-space footprint of the
+//!   visible pixels) gets a map fitted to it instead, made for it alone;
+//! * a point light, a cube of six 90° perspective maps around it, kept likewise.
 //!
 //! The maps hold the *far* sides of occluders (the faces turned away from the light) —
 //! second-depth shadow mapping (Wang and Molnar, 1994). A lit face is then compared with
@@ -41,6 +44,14 @@
 //! a small slope-scaled bias (¾ texel times the tangent of the light's incidence, capped
 //! at 3, plus half a texel) covers the rest. Bodies are closed, so every occluder has a far
 //! side. One tap per pixel: shadow edges are as sharp as the map's texels.
+//!
+//! A sun map stores 16-bit keys (a unit is 1/65535 of the scene's diagonal, rounded away
+//! from the sun) in 8 × 8 tiles, so that the texels a row of the picture looks up share
+//! cache lines, with a pyramid of per-block maxima and minima beside it. A run of pixels
+//! of one face along a row sees the map along a segment, so one look at the pyramid
+//! usually settles the whole run (all lit or all in shadow), and only runs that cross a
+//! shadow's edge are tested pixel by pixel. The pixels are lit band by band as soon as
+//! the z-buffer's band is drawn, while it is in the cache.
 
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
@@ -471,6 +482,12 @@ impl Lamp {
     }
 }
 
+/// Rows of a frame whose faces [`Lighter::fetch`] reads at a time.
+const FETCH_ROWS: usize = 4;
+
+/// Scenes with more faces than this (about 2 MB of them) have them fetched ahead.
+const FETCH_FACES: usize = 1 << 15;
+
 /// At most this many suns (and no point light) are lit through a per-face palette.
 const PALETTE_SUNS: usize = 4;
 
@@ -539,12 +556,33 @@ impl<'a> Lighter<'a> {
             .zip(out.chunks_mut(width * 3))
             .enumerate()
         {
+            if r % FETCH_ROWS == 0 && self.scene.faces.len() > FETCH_FACES {
+                self.fetch(&face[r * width..face.len().min((r + FETCH_ROWS) * width)]);
+            }
             let py = (y0 + r) as f64 + 0.5;
             match &mut palettes {
                 Some(p) => self.row_of_suns(py, depths, faces, out, p),
                 None => self.row(py, depths, faces, out),
             }
         }
+    }
+
+    /// Reads the scene data of every face in `faces` (a few rows of the frame) once,
+    /// ahead of lighting them. In a large world the faces a row shows are scattered
+    /// through the scene's arrays; reading them in a loop where no read waits for another
+    /// lets the processor fetch many at once, where lighting would wait for each in turn.
+    fn fetch(&self, faces: &[u32]) {
+        let mut last = NO_FACE;
+        let mut sum = 0u32;
+        for &f in faces {
+            if f != last && f != NO_FACE {
+                last = f;
+                if let Some(face) = self.scene.faces.get(f as usize) {
+                    sum = sum.wrapping_add(face.body);
+                }
+            }
+        }
+        std::hint::black_box(sum);
     }
 
     /// Lights one row, at pixel-coordinate height `py`, lamp by lamp.
@@ -594,24 +632,24 @@ impl<'a> Lighter<'a> {
         out: &mut [u8],
         palettes: &mut Palettes,
     ) {
+        let mut masks = [0u8; MARK_CHUNK];
         let mut x = 0;
         while x < faces.len() {
             let f = faces[x];
-            let mut end = x + 1;
-            while end < faces.len() && faces[end] == f {
-                end += 1;
-            }
+            let end = faces[x + 1..]
+                .iter()
+                .position(|&g| g != f)
+                .map_or(faces.len(), |p| x + 1 + p);
             let run = &mut out[x * 3..end * 3];
             if f == NO_FACE {
-                run.chunks_exact_mut(3)
-                    .for_each(|o| o.copy_from_slice(&self.background));
+                fill_rgb(run, self.background);
                 x = end;
                 continue;
             }
             let slot = palettes.slot(self, f);
             let prep = &palettes.prep[slot];
             // Suns known to see the whole run, and those to be asked pixel by pixel.
-            let (mut seen, mut ask) = (0usize, 0usize);
+            let (mut seen, mut ask) = (0u8, 0u8);
             let first = (x as f64 + 0.5, py, depths[x] as f64);
             let last = ((end - 1) as f64 + 0.5, py, depths[end - 1] as f64);
             for (k, (lamp, &(gain, bias))) in self.lamps.iter().zip(prep).enumerate() {
@@ -633,24 +671,47 @@ impl<'a> Lighter<'a> {
             }
             let colours = &palettes.colour[slot];
             if ask == 0 {
-                let c = colours[seen];
-                run.chunks_exact_mut(3).for_each(|o| o.copy_from_slice(&c));
-            } else {
-                for (i, o) in run.chunks_exact_mut(3).enumerate() {
-                    let at = ((x + i) as f64 + 0.5, py, depths[x + i] as f64);
-                    let mut mask = seen;
-                    for (k, (lamp, &(_, bias))) in self.lamps.iter().zip(prep).enumerate() {
-                        if ask & (1 << k) != 0 && lamp.sees(at, bias) {
-                            mask |= 1 << k;
-                        }
+                fill_rgb(run, colours[seen as usize]);
+                x = end;
+                continue;
+            }
+            for (c, run) in run.chunks_mut(3 * MARK_CHUNK).enumerate() {
+                let from = x + c * MARK_CHUNK;
+                let n = run.len() / 3;
+                let masks = &mut masks[..n];
+                masks.fill(seen);
+                for (k, (lamp, &(_, bias))) in self.lamps.iter().zip(prep).enumerate() {
+                    if let Lamp::Sun { map: Some(m), .. } = lamp
+                        && ask & (1 << k) != 0
+                    {
+                        m.mark(py, from, &depths[from..from + n], bias, masks, 1 << k);
                     }
-                    o.copy_from_slice(&colours[mask]);
+                }
+                for (o, &mask) in run.chunks_exact_mut(3).zip(masks.iter()) {
+                    o.copy_from_slice(&colours[mask as usize]);
                 }
             }
             x = end;
         }
     }
 }
+
+/// Fills `run` (RGB pixels) with `colour`.
+#[inline]
+fn fill_rgb(run: &mut [u8], colour: [u8; 3]) {
+    let [r, g, b] = colour;
+    let four = [r, g, b, r, g, b, r, g, b, r, g, b];
+    let mut chunks = run.chunks_exact_mut(12);
+    for c in &mut chunks {
+        c.copy_from_slice(&four);
+    }
+    for o in chunks.into_remainder().chunks_exact_mut(3) {
+        o.copy_from_slice(&colour);
+    }
+}
+
+/// Pixels [`Sight::mark`] takes at a time.
+const MARK_CHUNK: usize = 64;
 
 /// Runs of at least this many pixels of one face are first tested for shadow as a whole
 /// ([`Sight::run`]).
@@ -1203,6 +1264,37 @@ impl Sight {
             Some(false)
         } else {
             None
+        }
+    }
+
+    /// For each pixel of a run along the row at height `py`, from column `x0`, with
+    /// depths `depths` (at most [`MARK_CHUNK`]): sets `bit` in its entry of `masks` when
+    /// the sun sees it, allowing `bias` meters — what [`Sight::lit_at`] answers, pixel for
+    /// pixel. First every texel and threshold is computed, then the map is read, so that
+    /// the reads do not wait for one another.
+    #[inline]
+    fn mark(&self, py: f64, x0: usize, depths: &[f32], bias: f64, masks: &mut [u8], bit: u8) {
+        let m = &*self.map;
+        let (w, h) = (m.width as f64, m.height as f64);
+        let mut at = [0u32; MARK_CHUNK];
+        let mut most = [0.0f64; MARK_CHUNK];
+        for (i, &d) in depths.iter().enumerate().take(MARK_CHUNK) {
+            let [u, v, key] = self.project(((x0 + i) as f64 + 0.5, py, d as f64));
+            let inside = u >= 0.0 && v >= 0.0 && u < w && v < h;
+            // Saturating casts; a point off the map reads texel 0 against an infinite
+            // threshold: lit.
+            let (u, v) = (u as u32, v as u32);
+            let texel = ((v / TILE as u32) * m.tiles as u32 + u / TILE as u32)
+                * (TILE * TILE) as u32
+                + (v % TILE as u32) * TILE as u32
+                + u % TILE as u32;
+            at[i] = if inside { texel } else { 0 };
+            most[i] = if inside { key + bias } else { f64::INFINITY };
+        }
+        for ((mask, &at), &most) in masks.iter_mut().zip(&at).zip(&most) {
+            if m.key[at as usize] as f64 * m.unit <= most {
+                *mask |= bit;
+            }
         }
     }
 
