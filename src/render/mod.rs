@@ -12,6 +12,7 @@
 //! segment all describe the same picture.
 
 pub(crate) mod buffers;
+mod deflate;
 pub mod hidden;
 pub mod image;
 pub mod lines;

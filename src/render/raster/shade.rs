@@ -98,7 +98,7 @@ impl Default for Shading {
 }
 
 /// Texels on the longer side of a sun's kept shadow map (which covers the whole scene).
-pub const KEPT_SUN_SIDE: usize = 2048;
+pub const KEPT_SUN_SIDE: usize = 1024;
 
 /// Texels on the side of each of the six kept shadow maps of a point light.
 pub const KEPT_CUBE_SIDE: usize = 1024;
@@ -257,33 +257,45 @@ pub(super) fn shaded_with(scene: &Scene, view: &View, shading: &Shading, run: us
             lit.rows(band.y0, w, band.depth, band.face, band.out);
         }
         if fit {
-            footprints(&rays, &suns, band.y0, w, band.depth, band.face)
+            // With maps at hand the footprint only decides whether to refit: every few
+            // rows suffice.
+            let step = if ready { SAMPLED_ROWS } else { 1 };
+            footprints(&rays, &suns, band.y0, w, band.depth, band.face, step)
         } else {
             Vec::new()
         }
     });
     let diag = scene.bounds.map_or(0.0, |b| (b.max - b.min).length());
+    let sum = |boxes: &[Vec<[f64; 4]>], k: usize| {
+        boxes
+            .iter()
+            .fold(EMPTY, |a, b| b.get(k).map_or(a, |b| union(a, *b)))
+    };
+    let nonempty = |b: [f64; 4]| b[0] <= b[1] && b[2] <= b[3];
     let mut refit = !ready;
+    let mut exact: Option<Vec<Vec<[f64; 4]>>> = None;
     let mut lamps = lamps;
     for (k, lamp) in lamps.iter_mut().enumerate() {
         let Lamp::Sun { toward, map, .. } = lamp else {
             continue;
         };
-        if !shading.shadows {
-            continue;
-        }
-        let footprint = boxes
-            .iter()
-            .fold(EMPTY, |a, b| b.get(k).map_or(a, |b| union(a, *b)));
-        if !(footprint[0] <= footprint[1] && footprint[2] <= footprint[3]) {
+        if !shading.shadows || !nonempty(sum(&boxes, k)) {
             continue;
         }
         let coarse = map
             .as_ref()
-            .is_none_or(|m| m.map.texel > REFIT * fitted_texel(footprint, fit_side, diag));
-        if coarse
-            && let Some(fitted) = SunMap::new(scene, -*toward, footprint, fit_side, &mut scratch)
-        {
+            .is_none_or(|m| m.map.texel > REFIT * fitted_texel(sum(&boxes, k), fit_side, diag));
+        if !coarse {
+            continue;
+        }
+        // A fitted map covers every pixel: the footprint of every row.
+        let footprint = if ready {
+            let all = exact.get_or_insert_with(|| frame_footprints(&rays, &suns, &frame));
+            sum(all, k)
+        } else {
+            sum(&boxes, k)
+        };
+        if let Some(fitted) = SunMap::new(scene, -*toward, footprint, fit_side, &mut scratch) {
             *map = Some(Sight::new(Arc::new(fitted), &rays));
             refit = true;
         }
@@ -488,6 +500,9 @@ const FETCH_ROWS: usize = 4;
 /// Scenes with more faces than this (about 2 MB of them) have them fetched ahead.
 const FETCH_FACES: usize = 1 << 15;
 
+/// Every this many rows are enough to decide whether a kept sun map is too coarse.
+const SAMPLED_ROWS: usize = 4;
+
 /// At most this many suns (and no point light) are lit through a per-face palette.
 const PALETTE_SUNS: usize = 4;
 
@@ -578,7 +593,10 @@ impl<'a> Lighter<'a> {
             if f != last && f != NO_FACE {
                 last = f;
                 if let Some(face) = self.scene.faces.get(f as usize) {
-                    sum = sum.wrapping_add(face.body);
+                    let base = self.bases.get(face.body as usize).map_or(0.0, |b| b[0]);
+                    sum = sum
+                        .wrapping_add(face.normal.x.to_bits() as u32)
+                        .wrapping_add(base.to_bits());
                 }
             }
         }
@@ -647,12 +665,12 @@ impl<'a> Lighter<'a> {
                 continue;
             }
             let slot = palettes.slot(self, f);
-            let prep = &palettes.prep[slot];
+            let prep = palettes.prep[slot];
             // Suns known to see the whole run, and those to be asked pixel by pixel.
             let (mut seen, mut ask) = (0u8, 0u8);
             let first = (x as f64 + 0.5, py, depths[x] as f64);
             let last = ((end - 1) as f64 + 0.5, py, depths[end - 1] as f64);
-            for (k, (lamp, &(gain, bias))) in self.lamps.iter().zip(prep).enumerate() {
+            for (k, (lamp, &(gain, bias))) in self.lamps.iter().zip(&prep).enumerate() {
                 if gain <= 0.0 {
                     continue;
                 }
@@ -669,9 +687,8 @@ impl<'a> Lighter<'a> {
                     None => ask |= 1 << k,
                 }
             }
-            let colours = &palettes.colour[slot];
             if ask == 0 {
-                fill_rgb(run, colours[seen as usize]);
+                fill_rgb(run, palettes.colour(self, slot, seen));
                 x = end;
                 continue;
             }
@@ -680,7 +697,7 @@ impl<'a> Lighter<'a> {
                 let n = run.len() / 3;
                 let masks = &mut masks[..n];
                 masks.fill(seen);
-                for (k, (lamp, &(_, bias))) in self.lamps.iter().zip(prep).enumerate() {
+                for (k, (lamp, &(_, bias))) in self.lamps.iter().zip(&prep).enumerate() {
                     if let Lamp::Sun { map: Some(m), .. } = lamp
                         && ask & (1 << k) != 0
                     {
@@ -688,7 +705,7 @@ impl<'a> Lighter<'a> {
                     }
                 }
                 for (o, &mask) in run.chunks_exact_mut(3).zip(masks.iter()) {
-                    o.copy_from_slice(&colours[mask as usize]);
+                    o.copy_from_slice(&palettes.colour(self, slot, mask));
                 }
             }
             x = end;
@@ -723,8 +740,13 @@ struct Palettes {
     face: Vec<u32>,
     /// Each sun's [`Lamp::prepare`] for the slot's face.
     prep: Vec<[(f64, f64); PALETTE_SUNS]>,
-    /// The face's colour for each set of suns that see it (bit k for sun k).
+    /// The face's base colour (linear).
+    base: Vec<[f32; 3]>,
+    /// The face's colour for each set of suns that see it (bit k for sun k), made when
+    /// first asked for.
     colour: Vec<[[u8; 3]; 1 << PALETTE_SUNS]>,
+    /// Which of the slot's colours are made (bit m for set m).
+    made: Vec<u16>,
 }
 
 impl Palettes {
@@ -735,36 +757,45 @@ impl Palettes {
         Palettes {
             face: vec![NO_FACE; Self::SLOTS],
             prep: vec![[(0.0, 0.0); PALETTE_SUNS]; Self::SLOTS],
+            base: vec![[0.0; 3]; Self::SLOTS],
             colour: vec![[[0; 3]; 1 << PALETTE_SUNS]; Self::SLOTS],
+            made: vec![0; Self::SLOTS],
         }
     }
 
-    /// The slot holding face `f`'s palette, made for `lighter` if it is not there.
+    /// The slot holding face `f`, taken for it (with no colour made yet) if it is not
+    /// there.
     #[inline]
     fn slot(&mut self, lighter: &Lighter<'_>, f: u32) -> usize {
         let slot = f as usize % Self::SLOTS;
         if self.face[slot] != f {
             self.face[slot] = f;
             let face = &lighter.scene.faces[f as usize];
-            let base = lighter.bases[face.body as usize];
-            let prep = &mut self.prep[slot];
-            for (p, lamp) in prep.iter_mut().zip(lighter.lamps) {
+            self.base[slot] = lighter.bases[face.body as usize];
+            for (p, lamp) in self.prep[slot].iter_mut().zip(lighter.lamps) {
                 *p = lamp.prepare(face.normal);
             }
-            // Light per set of suns, each from the set without its highest sun.
-            let suns = lighter.lamps.len();
-            let mut light = [0.0f64; 1 << PALETTE_SUNS];
-            light[0] = lighter.ambient;
-            for mask in 1..1usize << suns {
-                let high = usize::BITS - 1 - mask.leading_zeros();
-                light[mask] = light[mask & !(1 << high)] + prep[high as usize].0;
-            }
-            for (colour, &l) in self.colour[slot].iter_mut().zip(&light).take(1 << suns) {
-                let l = l as f32;
-                *colour = base.map(|c| encode_one(lighter.encode, c * l));
-            }
+            self.made[slot] = 0;
         }
         slot
+    }
+
+    /// The colour of the face in `slot` where the suns of set `mask` see it.
+    #[inline]
+    fn colour(&mut self, lighter: &Lighter<'_>, slot: usize, mask: u8) -> [u8; 3] {
+        let m = mask as usize;
+        if self.made[slot] & (1 << m) == 0 {
+            self.made[slot] |= 1 << m;
+            let prep = &self.prep[slot];
+            let light = lighter.ambient
+                + (0..lighter.lamps.len())
+                    .filter(|k| m & (1 << k) != 0)
+                    .map(|k| prep[k].0)
+                    .sum::<f64>();
+            let l = light as f32;
+            self.colour[slot][m] = self.base[slot].map(|c| encode_one(lighter.encode, c * l));
+        }
+        self.colour[slot][m]
     }
 }
 
@@ -813,7 +844,7 @@ fn union(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
 
 /// For each of `suns` (`None` for a lamp that needs no fitting), the light-space box of
 /// the points a band of the picture shows: rows from `y0`, `width` pixels wide, with the
-/// frame's `depth` and `face` values. (Points on faces turned away from a sun are
+/// frame's `depth` and `face` values; only the rows whose index is a multiple of `step`. (Points on faces turned away from a sun are
 /// included; they make the box no smaller, and leaving them out would cost a look at
 /// every face.)
 ///
@@ -827,9 +858,15 @@ fn footprints(
     width: usize,
     depth: &[f32],
     face: &[u32],
+    step: usize,
 ) -> Vec<[f64; 4]> {
     let mut acc = vec![EMPTY; suns.len()];
-    for (r, (depths, faces)) in depth.chunks(width).zip(face.chunks(width)).enumerate() {
+    for (r, (depths, faces)) in depth
+        .chunks(width)
+        .zip(face.chunks(width))
+        .enumerate()
+        .filter(|(r, _)| (y0 + r).is_multiple_of(step))
+    {
         let py = (y0 + r) as f64 + 0.5;
         let mut x = 0;
         while x < faces.len() {
@@ -856,6 +893,19 @@ fn footprints(
         }
     }
     acc
+}
+
+/// [`footprints`] of every row of `frame`, band by band: per band, per sun.
+fn frame_footprints(rays: &Rays, suns: &[Option<Axes>], frame: &Frame) -> Vec<Vec<[f64; 4]>> {
+    let w = frame.width as usize;
+    let rows = 16;
+    frame
+        .depth
+        .par_chunks(w * rows)
+        .zip(frame.face.par_chunks(w * rows))
+        .enumerate()
+        .map(|(b, (depth, face))| footprints(rays, suns, b * rows, w, depth, face, 1))
+        .collect()
 }
 
 /// The light-space axes (s, t) across a sun's rays travelling along unit `direction`.
