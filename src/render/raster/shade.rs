@@ -211,30 +211,7 @@ pub(super) fn shaded_with(scene: &Scene, view: &View, shading: &Shading, run: us
     let mut scratch = Scratch::default();
     let mut lamps = lamps(scene, &rays);
     if shading.shadows {
-        for (light, lamp) in &mut lamps {
-            let kept = if keep { *light } else { None };
-            match lamp {
-                Lamp::Sun { toward, map, .. } => {
-                    let direction = -*toward;
-                    let make = || Kept::Sun(SunMap::whole(scene, direction).map(Arc::new));
-                    if let Some(Kept::Sun(Some(m))) = kept.map(|l| scene.shadows.get(l, make)) {
-                        *map = Some(Sight::new(m, &rays));
-                    }
-                }
-                Lamp::Point { position, map, .. } => {
-                    let position = *position;
-                    let make = || {
-                        CubeMap::new(scene, position, cube_side, &mut Scratch::default())
-                            .map(Arc::new)
-                    };
-                    *map = match kept.map(|l| scene.shadows.get(l, || Kept::Cube(make()))) {
-                        Some(Kept::Cube(m)) => m,
-                        Some(Kept::Sun(_)) => None,
-                        None => make(),
-                    };
-                }
-            }
-        }
+        attach_maps(scene, &rays, &mut lamps, keep, cube_side);
     }
     let lamps: Vec<Lamp> = lamps.into_iter().map(|(_, l)| l).collect();
     // The suns' light-space axes, for fitting shadow maps to what the picture shows.
@@ -308,6 +285,43 @@ pub(super) fn shaded_with(scene: &Scene, view: &View, shading: &Shading, run: us
         width,
         height,
         data,
+    }
+}
+
+/// Gives `lamps` (with their lights' indices) their shadow maps where they need no
+/// fitting to the picture: every point light (kept with the scene when `keep`, else
+/// made fresh with `cube_side` texels), and, when `keep`, every sun of the world's own
+/// lights (its map over the whole scene, kept). Suns left without a map are fitted to
+/// the picture later.
+fn attach_maps(
+    scene: &Scene,
+    rays: &Rays,
+    lamps: &mut [(Option<usize>, Lamp)],
+    keep: bool,
+    cube_side: usize,
+) {
+    for (light, lamp) in lamps {
+        let kept = if keep { *light } else { None };
+        match lamp {
+            Lamp::Sun { toward, map, .. } => {
+                let direction = -*toward;
+                let make = || Kept::Sun(SunMap::whole(scene, direction).map(Arc::new));
+                if let Some(Kept::Sun(Some(m))) = kept.map(|l| scene.shadows.get(l, make)) {
+                    *map = Some(Sight::new(m, rays));
+                }
+            }
+            Lamp::Point { position, map, .. } => {
+                let position = *position;
+                let make = || {
+                    CubeMap::new(scene, position, cube_side, &mut Scratch::default()).map(Arc::new)
+                };
+                *map = match kept.map(|l| scene.shadows.get(l, || Kept::Cube(make()))) {
+                    Some(Kept::Cube(m)) => m,
+                    Some(Kept::Sun(_)) => None,
+                    None => make(),
+                };
+            }
+        }
     }
 }
 
