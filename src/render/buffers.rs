@@ -13,7 +13,7 @@ use std::sync::{Mutex, PoisonError};
 pub const KEEP: usize = 8;
 
 /// Bytes kept per element type.
-pub const KEEP_BYTES: usize = 512 << 20;
+pub const KEEP_BYTES: usize = 128 << 20;
 
 /// An element type with a pool of its own.
 pub trait Pooled: Copy + Default + Send + 'static {

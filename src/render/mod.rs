@@ -5,7 +5,10 @@
 //! images and their PNG encoding; [`lines`] draws anti-aliased lines; [`raster`] makes
 //! the pixel pictures (z-buffer, shaded, wireframe, depth and body ids); [`hidden`]
 //! computes the exact hidden-line drawing as vector segments (and draws it, or writes it
-//! as SVG); [`render`] chooses among them by [`Mode`].
+//! as SVG); [`render`] chooses among them by [`Mode`]. Two private modules serve them:
+//! `buffers`, a pool of large pixel buffers kept from one picture for the next (give a
+//! picture's buffers back with [`raster::Frame::recycle`] and [`RgbImage::recycle`]),
+//! and `deflate`, the parallel DEFLATE encoder behind the PNG files.
 //!
 //! Every mode starts from the same camera ([`crate::camera::View`]) and the same clipping
 //! at the near plane, so a pixel of the `ids` image, a depth value and a hidden-line
