@@ -620,6 +620,38 @@ where
         .collect()
 }
 
+/// Draws `scene` as `proj` sees it into `key`, a `width × height` z-buffer of keys alone
+/// (a shadow map): [`draw`] into [`Keys`] bands. Precondition: `key.len()` is
+/// `width · height`; every value is overwritten (0 where nothing is drawn).
+pub(super) fn draw_keys<P: Projection>(
+    scene: &Scene,
+    proj: &P,
+    width: usize,
+    height: usize,
+    key: &mut [f32],
+    scratch: &mut Scratch,
+) {
+    draw(
+        scene,
+        proj,
+        width,
+        height,
+        scratch,
+        |rows| {
+            split_rows(key, width, rows)
+                .into_iter()
+                .map(|(y0, k)| Band {
+                    y0,
+                    rows: k.len() / width,
+                    width,
+                    sink: Keys(k),
+                })
+                .collect()
+        },
+        |_| (),
+    );
+}
+
 /// Splits a row-major buffer of `width`-pixel rows into bands of `rows` rows.
 pub(super) fn split_rows<T>(buf: &mut [T], width: usize, rows: usize) -> Vec<(usize, &mut [T])> {
     buf.chunks_mut((width * rows).max(1))

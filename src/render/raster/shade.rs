@@ -63,7 +63,7 @@ use crate::model::{Camera, Intrinsics, Light};
 use crate::render::image::RgbImage;
 use crate::render::scene::{Scene, SceneFace};
 
-use super::fill::{self, Band, Keys, Perspective, Projection, Scratch};
+use super::fill::{self, Perspective, Projection, Scratch};
 use super::{Frame, NO_FACE, rasterize_with};
 use crate::render::buffers;
 
@@ -1072,25 +1072,7 @@ impl SunMap {
         };
         // Cleared band by band while drawing.
         let mut key = buffers::take::<f32>(width * height);
-        fill::draw(
-            scene,
-            &view,
-            width,
-            height,
-            scratch,
-            |rows| {
-                fill::split_rows(&mut key, width, rows)
-                    .into_iter()
-                    .map(|(y0, k)| Band {
-                        y0,
-                        rows: k.len() / width,
-                        width,
-                        sink: Keys(k),
-                    })
-                    .collect()
-            },
-            |_| (),
-        );
+        fill::draw_keys(scene, &view, width, height, &mut key, scratch);
         // Every key is below zc + diag (the nearest point to the sun is at most a diagonal
         // from the far end) and above 1e-3·diag (zc's margin), so above 65 units: a
         // surface never rounds to 0.
@@ -1422,25 +1404,7 @@ impl CubeMap {
                     view: *view,
                     front: false,
                 };
-                fill::draw(
-                    scene,
-                    &proj,
-                    side,
-                    side,
-                    scratch,
-                    |rows| {
-                        fill::split_rows(&mut key, side, rows)
-                            .into_iter()
-                            .map(|(y0, k)| Band {
-                                y0,
-                                rows: k.len() / side,
-                                width: side,
-                                sink: Keys(k),
-                            })
-                            .collect()
-                    },
-                    |_| (),
-                );
+                fill::draw_keys(scene, &proj, side, side, &mut key, scratch);
                 key
             })
             .collect();
