@@ -461,7 +461,10 @@ fn bad_input_gets_a_problem_and_changes_nothing() {
     s.post("/v1/bodies", &json!({"shape": {"type": "box"}}))
         .problem(400);
     s.get("/v1/bodies/not-a-number").problem(400);
-    s.post_raw(&euler, "text/plain", b"{}").problem(415);
+    // Refused before its body is read: the client is told not to reuse the connection.
+    let unread = s.post_raw(&euler, "text/plain", b"{}");
+    assert_eq!(unread.header("connection"), "close");
+    unread.problem(415);
     // NaN and infinity cannot be written in JSON; out-of-range numbers are refused.
     s.post_raw(
         &euler,

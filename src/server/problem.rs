@@ -25,6 +25,9 @@ pub struct Problem {
     pub retry_after: Option<u64>,
     /// The world's revision, for answers where it matters (412).
     pub revision: Option<u64>,
+    /// Whether the answer comes before the request's body was read: then it is sent with
+    /// `Connection: close` (see [`refused_unread`]).
+    pub unread: bool,
 }
 
 #[derive(Serialize)]
@@ -53,12 +56,20 @@ impl Problem {
             detail: detail.into(),
             retry_after: None,
             revision: None,
+            unread: false,
         }
     }
 
     /// The same problem, telling the client to retry after `seconds`.
     pub fn retry_after(mut self, seconds: u64) -> Self {
         self.retry_after = Some(seconds);
+        self
+    }
+
+    /// The same problem, answered before the request's body was read (so with
+    /// `Connection: close`).
+    pub fn unread(mut self) -> Self {
+        self.unread = true;
         self
     }
 
@@ -134,6 +145,9 @@ impl IntoResponse for Problem {
             res.headers_mut()
                 .insert(header::RETRY_AFTER, HeaderValue::from(s));
         }
+        if self.unread {
+            res = refused_unread(res);
+        }
         res
     }
 }
@@ -148,13 +162,15 @@ impl From<JsonRejection> for Problem {
                     "Request body too large",
                     r.body_text(),
                 )
+                .unread()
             }
             JsonRejection::MissingJsonContentType(_) => Problem::new(
                 StatusCode::UNSUPPORTED_MEDIA_TYPE,
                 "unsupported-media-type",
                 "Unsupported media type",
                 "send the body as JSON with Content-Type: application/json",
-            ),
+            )
+            .unread(),
             _ => Problem::bad_request(r.body_text()),
         }
     }

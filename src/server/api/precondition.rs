@@ -81,14 +81,16 @@ where
     type Rejection = Problem;
 
     async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
-        let IfMatch(header) = IfMatch::from_headers(req.headers())?;
+        // Refused before the body is read: the connection cannot be reused.
+        let IfMatch(header) = IfMatch::from_headers(req.headers()).map_err(Problem::unread)?;
         if !is_json(req.headers()) {
             return Err(Problem::new(
                 StatusCode::UNSUPPORTED_MEDIA_TYPE,
                 "unsupported-media-type",
                 "Unsupported media type",
                 "send the body as JSON with Content-Type: application/json",
-            ));
+            )
+            .unread());
         }
         let bytes = Bytes::from_request(req, state)
             .await
@@ -168,6 +170,7 @@ fn body_problem(r: axum::extract::rejection::BytesRejection) -> Problem {
             "Request body too large",
             r.body_text(),
         )
+        .unread()
     } else {
         Problem::bad_request(r.body_text())
     }
