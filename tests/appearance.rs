@@ -141,17 +141,22 @@ fn depth_values_times_the_scale_are_distances_along_the_view_axis() {
     assert_eq!(png.at(0, 0)[0], 0, "no surface: 0");
 }
 
-#[test]
-fn ids_name_the_body_through_the_legend_and_json_counts_its_pixels() {
-    let s = TestServer::with_world(cube_world());
-    let cube = s.get("/v1/bodies").ok()["bodies"]
+/// The id of the body named "cube".
+fn cube_id(s: &TestServer) -> u64 {
+    s.get("/v1/bodies").ok()["bodies"]
         .as_array()
         .unwrap()
         .iter()
         .find(|b| b["name"] == "cube")
         .unwrap()["id"]
         .as_u64()
-        .unwrap();
+        .unwrap()
+}
+
+#[test]
+fn ids_name_the_body_through_the_legend_and_json_counts_its_pixels() {
+    let s = TestServer::with_world(cube_world());
+    let cube = cube_id(&s);
     let r = s.get("/v1/cameras/eye/image?mode=ids");
     assert_eq!(r.header("x-body-ids"), format!("1={cube}"));
     let png = Png::decode(&r.bytes);
@@ -310,14 +315,7 @@ fn a_drawing_follows_the_world() {
     let ids = |s: &TestServer| Png::decode(&s.get("/v1/cameras/eye/image?mode=ids").bytes);
     let covered = |p: &Png| p.samples.iter().filter(|&&v| v != 0).count();
     let before = covered(&ids(&s));
-    let cube = s.get("/v1/bodies").ok()["bodies"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|b| b["name"] == "cube")
-        .unwrap()["id"]
-        .as_u64()
-        .unwrap();
+    let cube = cube_id(&s);
     // Move the cube out of view: the next drawing is empty.
     s.patch(
         &format!("/v1/bodies/{cube}"),
