@@ -9,6 +9,7 @@ pub mod camera;
 pub mod model;
 pub mod render;
 pub mod server;
+pub mod spatial;
 pub mod store;
 
 /// The README's examples, compiled and run as doctests.

@@ -1,0 +1,579 @@
+//! A bounding-volume hierarchy over axis-aligned boxes: built by binned surface-area
+//! heuristic, stored flat (a node's two children are adjacent), boxes in `f32` rounded
+//! outward so that a node always contains what is under it.
+//!
+//! The hierarchy orders its primitives: after [`Bvh::build`], `order()[k]` is the index
+//! of the primitive stored at leaf position `k`, and leaves address ranges of that
+//! order. Callers keep their primitive data in that order so that a leaf's primitives
+//! are contiguous in memory.
+//!
+//! Traversals are conservative: they visit every leaf whose box could meet the query
+//! (within rounding), and the caller runs the exact test on each primitive.
+
+use glam::DVec3;
+
+use super::aabb::Aabb;
+
+/// Primitives per leaf, as a rule.
+const LEAF_MAX: usize = 4;
+/// Primitives per leaf at most (a small set with coincident centroids stays whole).
+pub const LEAF_LIMIT: usize = 2 * LEAF_MAX;
+/// SAH bins per axis.
+const BINS: usize = 12;
+
+/// One node: its box and either two children (at `first` and `first + 1`) or a range
+/// of primitives (`first .. first + count`).
+#[derive(Clone, Copy, Debug)]
+pub struct Node {
+    /// Smallest corner.
+    pub min: [f32; 3],
+    /// Largest corner.
+    pub max: [f32; 3],
+    /// The first child, or the first primitive position when `count > 0`.
+    pub first: u32,
+    /// Primitives in this leaf; 0 for an inner node.
+    pub count: u32,
+}
+
+impl Node {
+    /// Whether this node is a leaf.
+    #[inline]
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    /// Squared distance from `p` to the node's box (0 inside).
+    #[inline]
+    pub fn distance_squared(&self, p: DVec3) -> f64 {
+        let mut d = 0.0;
+        for k in 0..3 {
+            let lo = f64::from(self.min[k]);
+            let hi = f64::from(self.max[k]);
+            let x = p[k];
+            let e = if x < lo {
+                lo - x
+            } else if x > hi {
+                x - hi
+            } else {
+                0.0
+            };
+            d += e * e;
+        }
+        d
+    }
+
+    /// Whether the node's box meets the closed box `lo..=hi`.
+    #[inline]
+    pub fn overlaps(&self, lo: DVec3, hi: DVec3) -> bool {
+        (0..3).all(|k| f64::from(self.min[k]) <= hi[k] && f64::from(self.max[k]) >= lo[k])
+    }
+
+    /// The parameter interval where the ray `o + t·d` (with `inv` = 1/d per axis) is in
+    /// the box, clipped to `[0, t_max]`, or `None`.
+    #[inline]
+    pub fn ray_interval(&self, o: DVec3, inv: DVec3, t_max: f64) -> Option<f64> {
+        let (mut t0, mut t1) = (0.0f64, t_max);
+        for k in 0..3 {
+            let lo = f64::from(self.min[k]);
+            let hi = f64::from(self.max[k]);
+            if inv[k].is_infinite() {
+                if o[k] < lo || o[k] > hi {
+                    return None;
+                }
+                continue;
+            }
+            let (mut a, mut b) = ((lo - o[k]) * inv[k], (hi - o[k]) * inv[k]);
+            if a > b {
+                std::mem::swap(&mut a, &mut b);
+            }
+            // Widen by a hair so that rounding never loses a grazing hit.
+            t0 = t0.max(a - a.abs() * 1e-12);
+            t1 = t1.min(b + b.abs() * 1e-12);
+        }
+        (t0 <= t1).then_some(t0)
+    }
+
+    fn aabb(&self) -> Aabb {
+        Aabb::new(
+            DVec3::from_array(self.min.map(f64::from)),
+            DVec3::from_array(self.max.map(f64::from)),
+        )
+    }
+
+    fn set_box(&mut self, b: &Aabb) {
+        let (min, max) = b.to_f32_outward();
+        self.min = min;
+        self.max = max;
+    }
+}
+
+/// The hierarchy: nodes (root first) and the primitive order of the leaves.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+}
+
+/// A primitive while building: its box and centroid.
+#[derive(Clone, Copy)]
+struct Item {
+    bounds: Aabb,
+    centroid: DVec3,
+    index: u32,
+}
+
+impl Bvh {
+    /// The hierarchy over `boxes` (one per primitive). Empty boxes (min > max) are
+    /// kept but never met by a query.
+    pub fn build(boxes: &[Aabb]) -> Bvh {
+        if boxes.is_empty() {
+            return Bvh::default();
+        }
+        let mut items: Vec<Item> = boxes
+            .iter()
+            .enumerate()
+            .map(|(i, b)| Item {
+                bounds: *b,
+                centroid: if b.is_empty() {
+                    DVec3::ZERO
+                } else {
+                    b.center()
+                },
+                index: i as u32,
+            })
+            .collect();
+        let mut nodes = Vec::with_capacity(2 * boxes.len() / LEAF_MAX + 1);
+        nodes.push(Node {
+            min: [0.0; 3],
+            max: [0.0; 3],
+            first: 0,
+            count: 0,
+        });
+        split(&mut nodes, 0, &mut items, 0);
+        Bvh {
+            nodes,
+            order: items.into_iter().map(|it| it.index).collect(),
+        }
+    }
+
+    /// The nodes, root first.
+    #[inline]
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// `order()[k]`: the primitive at leaf position `k`.
+    #[inline]
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
+    /// Whether there are no primitives.
+    pub fn is_empty(&self) -> bool {
+        self.order.is_empty()
+    }
+
+    /// Heap bytes held.
+    pub fn heap_bytes(&self) -> usize {
+        self.nodes.capacity() * std::mem::size_of::<Node>() + self.order.capacity() * 4
+    }
+
+    /// Calls `visit(k)` for each leaf position `k` whose box (by its leaf) lies within
+    /// `r2_cull` (a squared distance) of `p`.
+    #[inline]
+    pub fn within(&self, p: DVec3, r2_cull: f64, mut visit: impl FnMut(usize)) {
+        self.walk(|n| n.distance_squared(p) <= r2_cull, &mut visit);
+    }
+
+    /// Calls `visit(k)` for each leaf position `k` whose leaf box meets `lo..=hi`.
+    #[inline]
+    pub fn overlapping(&self, lo: DVec3, hi: DVec3, mut visit: impl FnMut(usize)) {
+        self.walk(|n| n.overlaps(lo, hi), &mut visit);
+    }
+
+    fn walk(&self, mut enter: impl FnMut(&Node) -> bool, visit: &mut impl FnMut(usize)) {
+        if self.nodes.is_empty() || !enter(&self.nodes[0]) {
+            return;
+        }
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = &self.nodes[stack[top] as usize];
+            if n.is_leaf() {
+                for k in n.first..n.first + n.count {
+                    visit(k as usize);
+                }
+                continue;
+            }
+            for c in [n.first, n.first + 1] {
+                if enter(&self.nodes[c as usize]) {
+                    stack[top] = c;
+                    top += 1;
+                }
+            }
+        }
+    }
+
+    /// Best-first search: calls `test(k, best)` for leaf positions in order of their
+    /// leaf's distance from `p`, while that distance (squared) is below `best`;
+    /// `test` answers the new best squared distance (or `best` unchanged).
+    pub fn nearest(&self, p: DVec3, mut best: f64, mut test: impl FnMut(usize, f64) -> f64) -> f64 {
+        if self.nodes.is_empty() {
+            return best;
+        }
+        let mut heap = std::collections::BinaryHeap::new();
+        heap.push(Near(self.nodes[0].distance_squared(p), 0));
+        while let Some(Near(d, i)) = heap.pop() {
+            if d > best {
+                break;
+            }
+            let n = &self.nodes[i as usize];
+            if n.is_leaf() {
+                for k in n.first..n.first + n.count {
+                    best = test(k as usize, best);
+                }
+                continue;
+            }
+            for c in [n.first, n.first + 1] {
+                let dc = self.nodes[c as usize].distance_squared(p);
+                if dc <= best {
+                    heap.push(Near(dc, c));
+                }
+            }
+        }
+        best
+    }
+
+    /// Front-to-back ray walk: calls `test(k, t_best)` for leaf positions whose leaf the
+    /// ray `o + t·d` enters before `t_best`; `test` answers the new `t_best`.
+    pub fn ray(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        mut t_best: f64,
+        mut test: impl FnMut(usize, f64) -> f64,
+    ) -> f64 {
+        if self.nodes.is_empty() {
+            return t_best;
+        }
+        let inv = DVec3::ONE / d;
+        let mut stack: Vec<(f64, u32)> = Vec::with_capacity(64);
+        if let Some(t) = self.nodes[0].ray_interval(o, inv, t_best) {
+            stack.push((t, 0));
+        }
+        while let Some((t, i)) = stack.pop() {
+            if t > t_best {
+                continue;
+            }
+            let n = &self.nodes[i as usize];
+            if n.is_leaf() {
+                for k in n.first..n.first + n.count {
+                    t_best = test(k as usize, t_best);
+                }
+                continue;
+            }
+            let a = self.nodes[n.first as usize].ray_interval(o, inv, t_best);
+            let b = self.nodes[n.first as usize + 1].ray_interval(o, inv, t_best);
+            // Push the farther child first so the nearer one is walked first.
+            match (a, b) {
+                (Some(ta), Some(tb)) if ta <= tb => {
+                    stack.push((tb, n.first + 1));
+                    stack.push((ta, n.first));
+                }
+                (Some(ta), Some(tb)) => {
+                    stack.push((ta, n.first));
+                    stack.push((tb, n.first + 1));
+                }
+                (Some(ta), None) => stack.push((ta, n.first)),
+                (None, Some(tb)) => stack.push((tb, n.first + 1)),
+                (None, None) => {}
+            }
+        }
+        t_best
+    }
+
+    /// The parent of every node (the root's is itself), for [`Bvh::refit`].
+    pub fn parents(&self) -> Vec<u32> {
+        let mut parent = vec![0u32; self.nodes.len()];
+        for (i, n) in self.nodes.iter().enumerate() {
+            if !n.is_leaf() {
+                parent[n.first as usize] = i as u32;
+                parent[n.first as usize + 1] = i as u32;
+            }
+        }
+        parent
+    }
+
+    /// The leaf holding each leaf position, for [`Bvh::refit`].
+    pub fn leaf_of_positions(&self) -> Vec<u32> {
+        let mut leaf = vec![0u32; self.order.len()];
+        for (i, n) in self.nodes.iter().enumerate() {
+            if n.is_leaf() {
+                for k in n.first..n.first + n.count {
+                    leaf[k as usize] = i as u32;
+                }
+            }
+        }
+        leaf
+    }
+
+    /// Refits after the box of a primitive in leaf `leaf` changed: the leaf's box
+    /// becomes the union of `boxes` of its positions, and each ancestor the union of
+    /// its two children, up to the root (stopping early once a box is unchanged).
+    /// Returns the growth in total node surface area, a measure of lost quality.
+    pub fn refit(&mut self, parents: &[u32], leaf: u32, boxes: impl Fn(usize) -> Aabb) -> f64 {
+        let n = self.nodes[leaf as usize];
+        let mut b = Aabb::EMPTY;
+        for k in n.first..n.first + n.count {
+            b = b.union(&boxes(k as usize));
+        }
+        let mut growth = 0.0;
+        let mut i = leaf as usize;
+        loop {
+            let old = self.nodes[i];
+            let before = old.aabb().half_area();
+            self.nodes[i].set_box(&b);
+            let now = self.nodes[i];
+            growth += now.aabb().half_area() - before;
+            if now.min == old.min && now.max == old.max && i != leaf as usize {
+                break;
+            }
+            if i == 0 {
+                break;
+            }
+            let p = parents[i] as usize;
+            let f = self.nodes[p].first as usize;
+            b = self.nodes[f].aabb().union(&self.nodes[f + 1].aabb());
+            i = p;
+        }
+        growth
+    }
+
+    /// Total half surface area of all nodes (the SAH cost scale).
+    pub fn total_half_area(&self) -> f64 {
+        self.nodes.iter().map(|n| n.aabb().half_area()).sum()
+    }
+}
+
+/// A heap entry for best-first search: nearest first.
+#[derive(PartialEq)]
+struct Near(f64, u32);
+impl Eq for Near {}
+impl PartialOrd for Near {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Near {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        o.0.total_cmp(&self.0).then(o.1.cmp(&self.1))
+    }
+}
+
+/// Fills node `at` over `items` (which start at leaf position `offset`) and its
+/// subtree, splitting by binned SAH.
+fn split(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) {
+    let mut bounds = Aabb::EMPTY;
+    let mut cbounds = Aabb::EMPTY;
+    for it in items.iter() {
+        bounds = bounds.union(&it.bounds);
+        cbounds.grow(it.centroid);
+    }
+    nodes[at].set_box(&bounds);
+    let count = items.len() as u32;
+    let leaf = |nodes: &mut Vec<Node>| {
+        nodes[at].first = offset as u32;
+        nodes[at].count = count;
+    };
+    if items.len() <= LEAF_MAX {
+        leaf(nodes);
+        return;
+    }
+    let extent = cbounds.max - cbounds.min;
+    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
+    let mid = if extent[axis] > 0.0 {
+        sah_split(items, axis, cbounds.min[axis], extent[axis])
+    } else {
+        None
+    };
+    let mid = match mid {
+        Some(m) => m,
+        None if items.len() <= LEAF_LIMIT && extent[axis] <= 0.0 => {
+            // Coincident centroids in a small set: a leaf (a little over the limit).
+            leaf(nodes);
+            return;
+        }
+        None => {
+            // No split pays off by SAH, but the leaf is too big: split at the median.
+            let m = items.len() / 2;
+            items.select_nth_unstable_by(m, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+            m
+        }
+    };
+    let first = nodes.len();
+    let blank = nodes[at];
+    nodes.push(blank);
+    nodes.push(blank);
+    nodes[at].first = first as u32;
+    nodes[at].count = 0;
+    let (left, right) = items.split_at_mut(mid);
+    split(nodes, first, left, offset);
+    split(nodes, first + 1, right, offset + mid);
+}
+
+/// The SAH split of `items` along `axis`: partitions them and answers the split point,
+/// or `None` when every centroid falls in one bin.
+fn sah_split(items: &mut [Item], axis: usize, cmin: f64, extent: f64) -> Option<usize> {
+    let scale = BINS as f64 / extent;
+    let bin_of = |c: f64| (((c - cmin) * scale) as usize).min(BINS - 1);
+    let mut bins = [(Aabb::EMPTY, 0usize); BINS];
+    for it in items.iter() {
+        let b = &mut bins[bin_of(it.centroid[axis])];
+        b.0 = b.0.union(&it.bounds);
+        b.1 += 1;
+    }
+    // Sweep from the right, then from the left, to cost each of the BINS − 1 planes.
+    let mut right_area = [0.0f64; BINS];
+    let mut acc = Aabb::EMPTY;
+    for i in (1..BINS).rev() {
+        acc = acc.union(&bins[i].0);
+        right_area[i] = acc.half_area();
+    }
+    let mut best: Option<(f32, usize)> = None;
+    let mut acc = Aabb::EMPTY;
+    let mut left_count = 0;
+    for i in 0..BINS - 1 {
+        acc = acc.union(&bins[i].0);
+        left_count += bins[i].1;
+        let right_count = items.len() - left_count;
+        if left_count == 0 || right_count == 0 {
+            continue;
+        }
+        let cost =
+            (acc.half_area() * left_count as f64 + right_area[i + 1] * right_count as f64) as f32;
+        if best.is_none_or(|(c, _)| cost < c) {
+            best = Some((cost, i));
+        }
+    }
+    let (_, plane) = best?;
+    // Partition in place: bins 0..=plane to the left.
+    let mut l = 0;
+    for r in 0..items.len() {
+        if bin_of(items[r].centroid[axis]) <= plane {
+            items.swap(l, r);
+            l += 1;
+        }
+    }
+    (l > 0 && l < items.len()).then_some(l)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn boxes(n: usize) -> Vec<Aabb> {
+        // A deterministic scatter of small boxes.
+        let mut s = 12345u64;
+        let mut rnd = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let c = DVec3::new(rnd(), rnd(), rnd()) * 100.0;
+                let h = DVec3::new(rnd(), rnd(), rnd()) + 0.01;
+                Aabb::new(c - h, c + h)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_box_near_a_point_is_visited() {
+        let bs = boxes(5000);
+        let bvh = Bvh::build(&bs);
+        let mut seen = vec![false; bs.len()];
+        for k in 0..bs.len() {
+            assert!(!seen[bvh.order()[k] as usize]);
+            seen[bvh.order()[k] as usize] = true;
+        }
+        let p = DVec3::new(50.0, 40.0, 60.0);
+        let r2 = 64.0;
+        let mut got: Vec<u32> = Vec::new();
+        bvh.within(p, r2, |k| {
+            let i = bvh.order()[k];
+            if bs[i as usize].distance_squared(p) <= r2 {
+                got.push(i);
+            }
+        });
+        got.sort_unstable();
+        let want: Vec<u32> = (0..bs.len() as u32)
+            .filter(|&i| bs[i as usize].distance_squared(p) <= r2)
+            .collect();
+        assert!(!want.is_empty());
+        assert_eq!(got, want);
+    }
+
+    #[test]
+    fn nearest_and_ray_walks_find_the_brute_force_answer() {
+        let bs = boxes(3000);
+        let bvh = Bvh::build(&bs);
+        let p = DVec3::new(10.0, 90.0, 30.0);
+        let best = bvh.nearest(p, f64::INFINITY, |k, best| {
+            best.min(bs[bvh.order()[k] as usize].distance_squared(p))
+        });
+        let want = bs
+            .iter()
+            .map(|b| b.distance_squared(p))
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(best, want);
+        let d = DVec3::new(1.0, -0.3, 0.2).normalize();
+        let t = bvh.ray(p, d, f64::INFINITY, |k, t| {
+            bs[bvh.order()[k] as usize]
+                .ray_entry(p, d)
+                .map_or(t, |x| t.min(x))
+        });
+        let want = bs
+            .iter()
+            .filter_map(|b| b.ray_entry(p, d))
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(t, want);
+    }
+
+    #[test]
+    fn refit_keeps_every_box_inside_its_ancestors() {
+        let mut bs = boxes(2000);
+        let mut bvh = Bvh::build(&bs);
+        let parents = bvh.parents();
+        let leaves = bvh.leaf_of_positions();
+        let order = bvh.order().to_vec();
+        let mut pos_of = vec![0usize; bs.len()];
+        for (k, &i) in order.iter().enumerate() {
+            pos_of[i as usize] = k;
+        }
+        for i in (0..bs.len()).step_by(7) {
+            bs[i] = Aabb::new(bs[i].min + 30.0, bs[i].max + 30.0);
+            let k = pos_of[i];
+            bvh.refit(&parents, leaves[k], |k| bs[order[k] as usize]);
+        }
+        for (k, &i) in order.iter().enumerate() {
+            let mut n = leaves[k] as usize;
+            loop {
+                let node = bvh.nodes()[n].aabb();
+                assert!(node.contains(&bs[i as usize]), "position {k} node {n}");
+                if n == 0 {
+                    break;
+                }
+                n = parents[n] as usize;
+            }
+        }
+    }
+}

@@ -1,0 +1,536 @@
+//! The world-level index: one entry per body (its shape, its world pose and the world
+//! bounds of its shape) under a hierarchy of those bounds.
+//!
+//! Kept in step with the world by [`Spatial::sync`]: a body that moved (or whose
+//! supart moved) gets new bounds and its leaf is refitted, which costs a walk up one
+//! path of the hierarchy; a body whose geometry changed gets a new shape; a new body
+//! waits in a short list of loose entries; a removed body's entry is emptied. The
+//! hierarchy is built anew when those add up (many loose or dead entries, or refits
+//! that have doubled its surface area).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::aabb::Aabb;
+use super::bvh::Bvh;
+use super::query::{
+    BodyHit, BoxAnswer, BoxQuery, Detail, Found, Nearest, QueryError, RayHit, SphereAnswer,
+    SphereQuery, validate_point, validate_ray,
+};
+use super::reach::{self, Features, cull_radius2};
+use super::shape::BodyShape;
+use crate::model::{Body, BodyId, Pose, World};
+
+/// Loose entries (not yet under the hierarchy) tolerated before a rebuild.
+const LOOSE_MAX: usize = 64;
+/// The most primitives a hierarchy leaf holds.
+const LEAF_BOXES: usize = super::bvh::LEAF_LIMIT;
+
+/// One body in the index.
+struct Entry {
+    id: BodyId,
+    shape: Arc<BodyShape>,
+    pose: Pose,
+    inverse: Pose,
+    /// World bounds of the shape (empty for a removed body).
+    bounds: Aabb,
+}
+
+/// How much work a [`Spatial::sync`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SyncStats {
+    /// Bodies whose shape was built.
+    pub shaped: usize,
+    /// Bodies that moved.
+    pub moved: usize,
+    /// Bodies added.
+    pub added: usize,
+    /// Bodies removed.
+    pub removed: usize,
+    /// Whether the hierarchy was rebuilt.
+    pub rebuilt: bool,
+}
+
+/// The spatial index of one world revision.
+pub struct Spatial {
+    world: Arc<World>,
+    entries: Vec<Entry>,
+    by_id: HashMap<BodyId, u32>,
+    bvh: Bvh,
+    /// Parent of each hierarchy node.
+    parents: Vec<u32>,
+    /// Leaf of each leaf position.
+    leaf_of: Vec<u32>,
+    /// Leaf position of each entry under the hierarchy (`u32::MAX` when loose).
+    position: Vec<u32>,
+    /// Entries not under the hierarchy yet.
+    loose: Vec<u32>,
+    /// Entries emptied by removals.
+    dead: usize,
+    /// Surface area gained by refits since the last build, and the area then.
+    growth: f64,
+    built_area: f64,
+}
+
+impl Spatial {
+    /// The index of `world`, shapes built in parallel.
+    pub fn build(world: Arc<World>) -> Spatial {
+        let bodies: Vec<(BodyId, Arc<Body>)> = world
+            .bodies()
+            .filter(|(_, n)| n.body.vertex_count() > 0)
+            .map(|(id, n)| (id, n.body.clone()))
+            .collect();
+        let shapes: Vec<Arc<BodyShape>> = bodies
+            .par_iter()
+            .map(|(_, b)| Arc::new(BodyShape::build(b.clone())))
+            .collect();
+        let mut s = Spatial {
+            world: world.clone(),
+            entries: Vec::with_capacity(bodies.len()),
+            by_id: HashMap::with_capacity(bodies.len()),
+            bvh: Bvh::default(),
+            parents: Vec::new(),
+            leaf_of: Vec::new(),
+            position: Vec::new(),
+            loose: Vec::new(),
+            dead: 0,
+            growth: 0.0,
+            built_area: 0.0,
+        };
+        for ((id, _), shape) in bodies.into_iter().zip(shapes) {
+            let pose = world.world_pose(id).unwrap_or_default();
+            s.by_id.insert(id, s.entries.len() as u32);
+            s.entries.push(entry(id, shape, pose));
+        }
+        s.rebuild();
+        s
+    }
+
+    /// The world revision the index describes.
+    pub fn revision(&self) -> u64 {
+        self.world.revision()
+    }
+
+    /// The world the index describes.
+    pub fn world(&self) -> &Arc<World> {
+        &self.world
+    }
+
+    /// Bodies indexed.
+    pub fn len(&self) -> usize {
+        self.by_id.len()
+    }
+
+    /// Whether no body is indexed.
+    pub fn is_empty(&self) -> bool {
+        self.by_id.is_empty()
+    }
+
+    /// Heap bytes held by the index, shapes included (the bodies themselves are the
+    /// world's).
+    pub fn heap_bytes(&self) -> usize {
+        let shapes: usize = self
+            .entries
+            .iter()
+            .filter(|e| !e.bounds.is_empty())
+            .map(|e| e.shape.heap_bytes())
+            .sum();
+        shapes
+            + self.entries.capacity() * std::mem::size_of::<Entry>()
+            + self.by_id.capacity() * 16
+            + self.bvh.heap_bytes()
+            + (self.parents.capacity() + self.leaf_of.capacity() + self.position.capacity()) * 4
+    }
+
+    /// Brings the index to `world`. `touched` lists the bodies changed since the
+    /// index's revision (their parts are followed); `None` compares every body.
+    ///
+    /// Precondition: with `touched`, every body added, removed, moved, re-parented or
+    /// edited since the index's revision is listed (or is a part of one listed).
+    pub fn sync(&mut self, world: Arc<World>, touched: Option<&[BodyId]>) -> SyncStats {
+        let mut stats = SyncStats::default();
+        match touched {
+            Some(ids) => {
+                let mut stack: Vec<BodyId> = ids.to_vec();
+                while let Some(id) = stack.pop() {
+                    self.refresh(&world, id, &mut stats);
+                    if let Some(parts) = world.parts(id) {
+                        stack.extend_from_slice(parts);
+                    }
+                }
+            }
+            None => {
+                let ids: Vec<BodyId> = world.bodies().map(|(id, _)| id).collect();
+                for id in ids {
+                    self.refresh(&world, id, &mut stats);
+                }
+                let gone: Vec<BodyId> = self
+                    .by_id
+                    .keys()
+                    .copied()
+                    .filter(|id| world.node(*id).is_none())
+                    .collect();
+                for id in gone {
+                    self.refresh(&world, id, &mut stats);
+                }
+            }
+        }
+        self.world = world;
+        if self.loose.len() > LOOSE_MAX
+            || self.dead > LOOSE_MAX.max(self.entries.len() / 4)
+            || self.growth > self.built_area.max(f64::MIN_POSITIVE)
+        {
+            self.rebuild();
+            stats.rebuilt = true;
+        }
+        stats
+    }
+
+    /// Brings body `id`'s entry in line with `world`.
+    fn refresh(&mut self, world: &World, id: BodyId, stats: &mut SyncStats) {
+        let node = world.node(id).filter(|n| n.body.vertex_count() > 0);
+        let at = self.by_id.get(&id).copied();
+        match (node, at) {
+            (None, None) => {}
+            (None, Some(i)) => {
+                self.by_id.remove(&id);
+                self.entries[i as usize].bounds = Aabb::EMPTY;
+                self.refit(i);
+                self.dead += 1;
+                stats.removed += 1;
+            }
+            (Some(n), None) => {
+                let pose = world.world_pose(id).unwrap_or_default();
+                let shape = Arc::new(BodyShape::build(n.body.clone()));
+                let i = self.entries.len() as u32;
+                self.entries.push(entry(id, shape, pose));
+                self.position.push(u32::MAX);
+                self.by_id.insert(id, i);
+                self.loose.push(i);
+                stats.added += 1;
+                stats.shaped += 1;
+            }
+            (Some(n), Some(i)) => {
+                let pose = world.world_pose(id).unwrap_or_default();
+                let e = &mut self.entries[i as usize];
+                let reshaped = !Arc::ptr_eq(e.shape.body(), &n.body);
+                if reshaped {
+                    e.shape = Arc::new(BodyShape::build(n.body.clone()));
+                    stats.shaped += 1;
+                }
+                if reshaped || e.pose != pose {
+                    *e = entry(id, e.shape.clone(), pose);
+                    if !reshaped {
+                        stats.moved += 1;
+                    }
+                    self.refit(i);
+                }
+            }
+        }
+    }
+
+    /// Refits the hierarchy after entry `i`'s bounds changed.
+    fn refit(&mut self, i: u32) {
+        let k = self.position[i as usize];
+        if k == u32::MAX {
+            return;
+        }
+        let leaf = self.leaf_of[k as usize];
+        // The leaf's boxes are copied out: `refit` mutates the nodes beside the order.
+        let n = self.bvh.nodes()[leaf as usize];
+        let first = n.first as usize;
+        let order = self.bvh.order();
+        let mut boxes = [Aabb::EMPTY; LEAF_BOXES];
+        for (slot, k) in boxes.iter_mut().zip(first..first + n.count as usize) {
+            *slot = self.entries[order[k] as usize].bounds;
+        }
+        self.growth += self.bvh.refit(&self.parents, leaf, |k| boxes[k - first]);
+    }
+
+    /// Builds the hierarchy anew over the live entries (dropping removed ones).
+    fn rebuild(&mut self) {
+        self.entries.retain(|e| !e.bounds.is_empty());
+        self.by_id = self
+            .entries
+            .iter()
+            .enumerate()
+            .map(|(i, e)| (e.id, i as u32))
+            .collect();
+        let boxes: Vec<Aabb> = self.entries.iter().map(|e| e.bounds).collect();
+        self.bvh = Bvh::build(&boxes);
+        self.parents = self.bvh.parents();
+        self.leaf_of = self.bvh.leaf_of_positions();
+        self.position = vec![u32::MAX; self.entries.len()];
+        for (k, &i) in self.bvh.order().iter().enumerate() {
+            self.position[i as usize] = k as u32;
+        }
+        self.loose.clear();
+        self.dead = 0;
+        self.growth = 0.0;
+        self.built_area = self.bvh.total_half_area();
+    }
+
+    /// Calls `visit` with each entry whose world bounds lie within `r2` (squared) of
+    /// `p`.
+    fn entries_within(&self, p: DVec3, r2: f64, mut visit: impl FnMut(&Entry)) {
+        let order = self.bvh.order();
+        self.bvh.within(p, r2, |k| {
+            let e = &self.entries[order[k] as usize];
+            if e.bounds.distance_squared(p) <= r2 {
+                visit(e);
+            }
+        });
+        for &i in &self.loose {
+            let e = &self.entries[i as usize];
+            if e.bounds.distance_squared(p) <= r2 {
+                visit(e);
+            }
+        }
+    }
+
+    fn hit(&self, e: &Entry, distance: Option<f64>, inside: bool, f: Option<Features>) -> BodyHit {
+        let (faces, edges, vertices) = match f {
+            Some(f) => (Some(f.faces), Some(f.edges), Some(f.vertices)),
+            None => (None, None, None),
+        };
+        BodyHit {
+            id: e.id.get(),
+            name: self.world.name(e.id).map(str::to_owned),
+            distance,
+            inside,
+            faces,
+            edges,
+            vertices,
+        }
+    }
+
+    /// The bodies reaching into a ball, with what of them is inside it.
+    pub fn sphere(&self, q: &SphereQuery) -> Result<SphereAnswer, QueryError> {
+        q.validate()?;
+        let mut bodies = Vec::new();
+        let mut count = 0usize;
+        let mut tolerance: f64 = 0.0;
+        let mut too_many = false;
+        self.entries_within(q.center, cull_radius2(q.radius), |e| {
+            if too_many {
+                return;
+            }
+            let mut f = Features::default();
+            let c = e.inverse.transform_point(q.center);
+            let Some((distance, inside)) = reach::ball(
+                &e.shape,
+                &e.pose,
+                c,
+                q.radius,
+                q.detail,
+                q.tolerance,
+                &mut f,
+            ) else {
+                return;
+            };
+            count += f.count();
+            if count > q.max_features {
+                too_many = true;
+                return;
+            }
+            tolerance = tolerance.max(f.tolerance);
+            f.sort();
+            let f = (q.detail != Detail::Bodies).then_some(f);
+            bodies.push(self.hit(e, Some(distance), inside, f));
+        });
+        if too_many {
+            return Err(QueryError::TooManyFeatures {
+                limit: q.max_features,
+            });
+        }
+        bodies.sort_by(|a, b| {
+            a.distance
+                .unwrap_or(0.0)
+                .total_cmp(&b.distance.unwrap_or(0.0))
+                .then(a.id.cmp(&b.id))
+        });
+        Ok(SphereAnswer {
+            revision: self.revision(),
+            center: q.center,
+            radius: q.radius,
+            detail: q.detail,
+            tolerance: (q.detail == Detail::Portions).then(|| q.tolerance.max(tolerance)),
+            bodies,
+        })
+    }
+
+    /// The bodies reaching into a closed axis-aligned box, with what of them is inside.
+    pub fn aabb(&self, q: &BoxQuery) -> Result<BoxAnswer, QueryError> {
+        q.validate()?;
+        let region = Aabb::new(q.min, q.max);
+        let mut bodies = Vec::new();
+        let mut count = 0usize;
+        let mut too_many = false;
+        let mut visit = |e: &Entry| {
+            if too_many || !e.bounds.overlaps(&region) {
+                return;
+            }
+            let mut f = Features::default();
+            let Some(inside) = reach::aabb(
+                &e.shape, &e.pose, &e.inverse, q.min, q.max, q.detail, &mut f,
+            ) else {
+                return;
+            };
+            count += f.count();
+            if count > q.max_features {
+                too_many = true;
+                return;
+            }
+            f.sort();
+            let f = (q.detail != Detail::Bodies).then_some(f);
+            bodies.push(self.hit(e, None, inside, f));
+        };
+        let order = self.bvh.order();
+        self.bvh
+            .overlapping(q.min, q.max, |k| visit(&self.entries[order[k] as usize]));
+        for &i in &self.loose {
+            visit(&self.entries[i as usize]);
+        }
+        if too_many {
+            return Err(QueryError::TooManyFeatures {
+                limit: q.max_features,
+            });
+        }
+        bodies.sort_by_key(|b| b.id);
+        Ok(BoxAnswer {
+            revision: self.revision(),
+            min: q.min,
+            max: q.max,
+            detail: q.detail,
+            bodies,
+        })
+    }
+
+    /// The body whose solid is nearest `point` (ties to the smaller id), within
+    /// `max_distance` (`f64::INFINITY` for no limit).
+    pub fn nearest(&self, point: DVec3, max_distance: f64) -> Result<Found<Nearest>, QueryError> {
+        validate_point(point, max_distance)?;
+        let mut best: Option<Nearest> = None;
+        let bound = max_distance * max_distance;
+        let mut consider = |e: &Entry, best2: f64| -> f64 {
+            if e.bounds.distance_squared(point) > best2 {
+                return best2;
+            }
+            let c = e.inverse.transform_point(point);
+            let inside = e.shape.contains(c);
+            let limit = if inside { f64::INFINITY } else { best2 };
+            let Some((k, cl)) = e.shape.nearest_face(c, limit) else {
+                return best2;
+            };
+            let d2 = if inside { 0.0 } else { cl.d2 };
+            let better = match &best {
+                None => d2 <= best2,
+                Some(b) => d2 < best2 || (d2 == best2 && e.id.get() < b.id),
+            };
+            if !better {
+                return best2;
+            }
+            best = Some(Nearest {
+                id: e.id.get(),
+                name: None,
+                distance: d2.sqrt(),
+                inside,
+                surface_distance: cl.d2.sqrt(),
+                point: e.pose.transform_point(cl.point),
+                face: e.shape.faces[k].serial,
+            });
+            d2
+        };
+        let order = self.bvh.order();
+        let mut b2 = self.bvh.nearest(point, bound, |k, b2| {
+            consider(&self.entries[order[k] as usize], b2)
+        });
+        for &i in &self.loose {
+            b2 = consider(&self.entries[i as usize], b2);
+        }
+        let _ = b2;
+        let hit = best.map(|mut n| {
+            n.name = self
+                .world
+                .name(BodyId(crate::model::Serial(n.id)))
+                .map(str::to_owned);
+            n
+        });
+        Ok(Found {
+            revision: self.revision(),
+            hit,
+        })
+    }
+
+    /// The first face the ray from `origin` along `direction` meets within
+    /// `max_distance` (`f64::INFINITY` for no limit); a hit at the origin counts.
+    pub fn ray(
+        &self,
+        origin: DVec3,
+        direction: DVec3,
+        max_distance: f64,
+    ) -> Result<Found<RayHit>, QueryError> {
+        let d = validate_ray(origin, direction, max_distance)?;
+        let mut best: Option<(f64, u32, usize)> = None;
+        let mut consider = |i: u32, t_best: f64| -> f64 {
+            let e = &self.entries[i as usize];
+            if e.bounds.ray_entry(origin, d).is_none_or(|t| t > t_best) {
+                return t_best;
+            }
+            let o = e.inverse.transform_point(origin);
+            let db = e.inverse.transform_vector(d);
+            let mut t_best = t_best;
+            e.shape
+                .bvh
+                .ray(o, db, t_best, |k, tb| match e.shape.ray_face(k, o, db) {
+                    Some((t, _)) if t < tb || (t == tb && best.is_none()) => {
+                        best = Some((t, i, k));
+                        t_best = t;
+                        t
+                    }
+                    _ => tb,
+                });
+            t_best
+        };
+        let order = self.bvh.order();
+        let mut t = self
+            .bvh
+            .ray(origin, d, max_distance, |k, t| consider(order[k], t));
+        for &i in &self.loose {
+            t = consider(i, t);
+        }
+        let _ = t;
+        let hit = best.map(|(t, i, k)| {
+            let e = &self.entries[i as usize];
+            let f = &e.shape.faces[k];
+            let normal = e.pose.transform_vector(f.normal);
+            RayHit {
+                id: e.id.get(),
+                name: self.world.name(e.id).map(str::to_owned),
+                face: f.serial,
+                point: origin + d * t,
+                distance: t,
+                normal,
+                entering: normal.dot(d) < 0.0,
+            }
+        });
+        Ok(Found {
+            revision: self.revision(),
+            hit,
+        })
+    }
+}
+
+fn entry(id: BodyId, shape: Arc<BodyShape>, pose: Pose) -> Entry {
+    let bounds = shape.bounds.transformed(&pose);
+    Entry {
+        id,
+        inverse: pose.inverse(),
+        shape,
+        pose,
+        bounds,
+    }
+}

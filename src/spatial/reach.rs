@@ -1,0 +1,231 @@
+//! How far one posed body reaches into a ball or a box: its faces, edges and vertices
+//! there, exactly, in world coordinates.
+
+use glam::{DVec2, DVec3};
+
+use super::aabb::Aabb;
+use super::exact::{
+    achieved_tolerance, clip_polygon_box, clip_segment_ball, clip_segment_box, lerp_exact,
+    polygon_disc,
+};
+use super::query::{Detail, EdgeHit, FaceHit, VertexHit};
+use super::shape::{BodyShape, Closest, NO_EDGE, REPORT_EDGE, REPORT_VERTEX};
+use crate::model::Pose;
+
+/// The features of one body found by a query, in world coordinates.
+#[derive(Default)]
+pub struct Features {
+    /// Faces meeting the region.
+    pub faces: Vec<FaceHit>,
+    /// Edges entering it, clipped.
+    pub edges: Vec<EdgeHit>,
+    /// Vertices inside it.
+    pub vertices: Vec<VertexHit>,
+    /// The largest chord deviation of the portions drawn.
+    pub tolerance: f64,
+}
+
+impl Features {
+    /// How many features were found.
+    pub fn count(&self) -> usize {
+        self.faces.len() + self.edges.len() + self.vertices.len()
+    }
+
+    /// Sorts each list by id.
+    pub fn sort(&mut self) {
+        self.faces.sort_unstable_by_key(|f| f.id);
+        self.edges.sort_unstable_by_key(|e| e.id);
+        self.vertices.sort_unstable_by_key(|v| v.id);
+    }
+}
+
+/// How much a squared cull radius is widened so that rounding in box distances never
+/// drops a face that the exact test would keep.
+#[inline]
+pub fn cull_radius2(r: f64) -> f64 {
+    let r2 = r * r;
+    r2 + r2 * 1e-9 + f64::MIN_POSITIVE
+}
+
+/// The ball of centre `c` (body frame) and radius `r` against `shape` posed at `pose`:
+/// `Some((distance, inside))` when the body's solid meets the ball, with its features
+/// (at `detail` above `bodies`) appended to `out` in world coordinates.
+pub fn ball(
+    shape: &BodyShape,
+    pose: &Pose,
+    c: DVec3,
+    r: f64,
+    detail: Detail,
+    tolerance: f64,
+    out: &mut Features,
+) -> Option<(f64, bool)> {
+    let r2 = r * r;
+    let features = detail != Detail::Bodies;
+    let mut nearest: Option<Closest> = None;
+    shape.bvh.within(c, cull_radius2(r), |k| {
+        let cs = shape.corners_of(k);
+        let mut meets = false;
+        for (i, corner) in cs.iter().enumerate() {
+            let a = shape.points[corner.vertex as usize];
+            let b = shape.points[cs[(i + 1) % cs.len()].vertex as usize];
+            let Some((t0, t1)) = clip_segment_ball(a, b, c, r) else {
+                continue;
+            };
+            meets = true;
+            if !features {
+                continue;
+            }
+            if corner.flags & REPORT_EDGE != 0 && corner.edge != NO_EDGE {
+                out.edges.push(EdgeHit {
+                    id: shape.edge_serials[corner.edge as usize],
+                    segment: [
+                        pose.transform_point(lerp_exact(a, b, t0)),
+                        pose.transform_point(lerp_exact(a, b, t1)),
+                    ],
+                });
+            }
+            if corner.flags & REPORT_VERTEX != 0 && (a - c).length_squared() <= r2 {
+                out.vertices.push(VertexHit {
+                    id: shape.vertex_serials[corner.vertex as usize],
+                    position: pose.transform_point(a),
+                });
+            }
+        }
+        let closest = shape.closest_on_face(k, c);
+        meets |= closest.interior && closest.d2 <= r2;
+        if !meets {
+            return;
+        }
+        if nearest.is_none_or(|n| closest.d2 < n.d2) {
+            nearest = Some(closest);
+        }
+        if features {
+            let portion = (detail == Detail::Portions).then(|| {
+                let (loops, tol) = disc_portion(shape, k, c, r, tolerance);
+                out.tolerance = out.tolerance.max(tol);
+                loops
+                    .into_iter()
+                    .map(|l| l.into_iter().map(|p| pose.transform_point(p)).collect())
+                    .collect()
+            });
+            out.faces.push(FaceHit {
+                id: shape.faces[k].serial,
+                distance: Some(closest.d2.sqrt()),
+                portion,
+            });
+        }
+    });
+    match nearest {
+        Some(n) => {
+            // The nearest point inside a face: the face plane's side tells; on an edge
+            // or a vertex it does not, so count crossings.
+            let inside = if n.interior {
+                n.plane_distance <= 0.0
+            } else {
+                shape.contains(c)
+            };
+            Some((if inside { 0.0 } else { n.d2.sqrt() }, inside))
+        }
+        // No face meets the ball: either it is wholly inside the solid or apart from it.
+        None => shape.contains(c).then_some((0.0, true)),
+    }
+}
+
+/// The part of face `k` inside the ball (body frame) and the chord deviation drawn with.
+fn disc_portion(
+    shape: &BodyShape,
+    k: usize,
+    c: DVec3,
+    r: f64,
+    tolerance: f64,
+) -> (Vec<Vec<DVec3>>, f64) {
+    let f = &shape.faces[k];
+    let n = f.normal;
+    if n == DVec3::ZERO {
+        return (Vec::new(), 0.0);
+    }
+    let pd = n.dot(c) - f.offset;
+    let rho = (r * r - pd * pd).max(0.0).sqrt();
+    let o = c - n * pd;
+    let u = n.any_orthonormal_vector();
+    let v = n.cross(u);
+    let poly: Vec<DVec2> = shape
+        .loop_points(k)
+        .map(|p| DVec2::new((p - o).dot(u), (p - o).dot(v)))
+        .collect();
+    let loops = polygon_disc(&poly, rho, tolerance)
+        .into_iter()
+        .map(|l| l.into_iter().map(|q| o + u * q.x + v * q.y).collect())
+        .collect();
+    (loops, achieved_tolerance(rho, tolerance))
+}
+
+/// The closed world box `lo..=hi` against `shape` posed at `pose` (`inverse` its
+/// inverse): `Some(inside)` when the body's solid meets the box (inside: the box's
+/// centre is in the solid), with its features (at `detail` above `bodies`) appended to
+/// `out` in world coordinates.
+pub fn aabb(
+    shape: &BodyShape,
+    pose: &Pose,
+    inverse: &Pose,
+    lo: DVec3,
+    hi: DVec3,
+    detail: Detail,
+    out: &mut Features,
+) -> Option<bool> {
+    let features = detail != Detail::Bodies;
+    let local = Aabb::new(lo, hi).transformed(inverse);
+    let mut met = false;
+    let mut pts: Vec<DVec3> = Vec::new();
+    let in_box = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    shape.bvh.overlapping(local.min, local.max, |k| {
+        let cs = shape.corners_of(k);
+        pts.clear();
+        pts.extend(shape.loop_points(k).map(|p| pose.transform_point(p)));
+        let mut meets = false;
+        for (i, corner) in cs.iter().enumerate() {
+            let (a, b) = (pts[i], pts[(i + 1) % pts.len()]);
+            let Some((t0, t1)) = clip_segment_box(a, b, lo, hi) else {
+                continue;
+            };
+            meets = true;
+            if !features {
+                continue;
+            }
+            if corner.flags & REPORT_EDGE != 0 && corner.edge != NO_EDGE {
+                out.edges.push(EdgeHit {
+                    id: shape.edge_serials[corner.edge as usize],
+                    segment: [lerp_exact(a, b, t0), lerp_exact(a, b, t1)],
+                });
+            }
+            if corner.flags & REPORT_VERTEX != 0 && in_box(a) {
+                out.vertices.push(VertexHit {
+                    id: shape.vertex_serials[corner.vertex as usize],
+                    position: a,
+                });
+            }
+        }
+        let clipped =
+            (!meets || detail == Detail::Portions).then(|| clip_polygon_box(&pts, lo, hi));
+        meets |= clipped.as_ref().is_some_and(|c| !c.is_empty());
+        if !meets {
+            return;
+        }
+        met = true;
+        if features {
+            let portion = (detail == Detail::Portions).then(|| {
+                clipped
+                    .filter(|c| !c.is_empty())
+                    .map_or_else(Vec::new, |c| vec![c])
+            });
+            out.faces.push(FaceHit {
+                id: shape.faces[k].serial,
+                distance: None,
+                portion,
+            });
+        }
+    });
+    let centre = inverse.transform_point((lo + hi) * 0.5);
+    let inside = shape.contains(centre);
+    (met || inside).then_some(inside)
+}

@@ -1,0 +1,352 @@
+//! One body's faces, edges and vertices laid out for spatial queries, in the body's own
+//! frame: compact loci, each face's plane and perimeter, and a hierarchy over the faces.
+//!
+//! A shape is built once per body geometry (the `Arc<Body>` it was built from is kept,
+//! so an unchanged body is recognised by pointer) and reused however the body moves.
+//!
+//! Every edge and every vertex is reported from exactly one face perimeter corner (its
+//! *canonical* corner): an edge from its use on side N, a vertex from the outgoing use
+//! of its PED. An edge that enters a ball has both its faces meet the ball, and a vertex
+//! inside a ball has the edge of its canonical use enter it, so walking the faces that
+//! meet a ball finds every edge and vertex, each once.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use super::aabb::Aabb;
+use super::bvh::Bvh;
+use super::exact::{boundary_margin, drop_axis, in_polygon, segment_closest};
+use crate::model::{Body, EdgeUse, Side};
+
+/// No edge: the corner of an edgeless face (a seminal body's).
+pub const NO_EDGE: u32 = u32::MAX;
+/// Corner flag: this corner reports its edge.
+pub const REPORT_EDGE: u8 = 1;
+/// Corner flag: this corner reports its starting vertex.
+pub const REPORT_VERTEX: u8 = 2;
+
+/// One corner of a face perimeter: the use of `edge` starting at `vertex`.
+#[derive(Clone, Copy, Debug)]
+pub struct Corner {
+    /// Compact index of the vertex the use starts at.
+    pub vertex: u32,
+    /// Compact index of the edge, or [`NO_EDGE`].
+    pub edge: u32,
+    /// [`REPORT_EDGE`] and/or [`REPORT_VERTEX`].
+    pub flags: u8,
+}
+
+/// One face: its plane, where its corners are and its serial number.
+#[derive(Clone, Copy, Debug)]
+pub struct FaceRec {
+    /// Unit outward normal (zero for a face of no area).
+    pub normal: DVec3,
+    /// Plane offset: `normal · x = offset`.
+    pub offset: f64,
+    /// The two coordinates kept when projecting the face for point-in-polygon tests.
+    pub axes: (u8, u8),
+    /// First corner in [`BodyShape::corners`].
+    pub start: u32,
+    /// Number of corners.
+    pub len: u32,
+    /// The face's serial number.
+    pub serial: u64,
+}
+
+/// Where on a face the closest point to a query point lies.
+#[derive(Clone, Copy, Debug)]
+pub struct Closest {
+    /// Squared distance.
+    pub d2: f64,
+    /// The closest point (body frame).
+    pub point: DVec3,
+    /// Whether it is inside the face (not on its perimeter), so that the side of the
+    /// face plane tells inside from outside.
+    pub interior: bool,
+    /// Signed distance from the face plane.
+    pub plane_distance: f64,
+}
+
+/// A body laid out for queries. Positions are in the body's own frame.
+pub struct BodyShape {
+    body: Arc<Body>,
+    /// Vertex loci.
+    pub points: Vec<DVec3>,
+    /// Vertex serial numbers.
+    pub vertex_serials: Vec<u64>,
+    /// Edge serial numbers.
+    pub edge_serials: Vec<u64>,
+    /// Faces, in the hierarchy's leaf order.
+    pub faces: Vec<FaceRec>,
+    /// Every face's corners, face after face.
+    pub corners: Vec<Corner>,
+    /// The hierarchy over the faces (leaf position `k` is `faces[k]`).
+    pub bvh: Bvh,
+    /// Bounds of the vertices.
+    pub bounds: Aabb,
+    /// Length of the bounds' diagonal (the scale of tolerances).
+    pub size: f64,
+}
+
+impl BodyShape {
+    /// The shape of `body`.
+    pub fn build(body: Arc<Body>) -> BodyShape {
+        let b = &*body;
+        let mut vix = vec![u32::MAX; b.vertices().map(|v| v.index() + 1).max().unwrap_or(0)];
+        let mut points = Vec::with_capacity(b.vertex_count());
+        let mut vertex_serials = Vec::with_capacity(b.vertex_count());
+        for v in b.vertices() {
+            vix[v.index()] = points.len() as u32;
+            points.push(b.position(v));
+            vertex_serials.push(b.vertex_serial(v).get());
+        }
+        let mut eix = vec![u32::MAX; b.edges().map(|e| e.index() + 1).max().unwrap_or(0)];
+        let mut edge_serials = Vec::with_capacity(b.edge_count());
+        for e in b.edges() {
+            eix[e.index()] = edge_serials.len() as u32;
+            edge_serials.push(b.edge_serial(e).get());
+        }
+        let canonical_vertex_use = |u: EdgeUse| {
+            let v = b.origin(u);
+            b.vertex_first_use(v) == Some(u)
+        };
+        let mut faces = Vec::with_capacity(b.face_count());
+        let mut corners = Vec::with_capacity(2 * b.edge_count() + 1);
+        let mut boxes = Vec::with_capacity(b.face_count());
+        let lone: Vec<u32> = b
+            .vertices()
+            .filter(|&v| b.vertex(v).ped.is_none())
+            .map(|v| vix[v.index()])
+            .collect();
+        for f in b.faces() {
+            let start = corners.len() as u32;
+            for u in b.face_uses(f) {
+                let mut flags = 0;
+                if u.side == Side::N {
+                    flags |= REPORT_EDGE;
+                }
+                if canonical_vertex_use(u) {
+                    flags |= REPORT_VERTEX;
+                }
+                corners.push(Corner {
+                    vertex: vix[b.origin(u).index()],
+                    edge: eix[u.edge.index()],
+                    flags,
+                });
+            }
+            if corners.len() as u32 == start {
+                // An edgeless face (a seminal body): its polygon is the lone vertex.
+                if let Some(&v) = lone.first() {
+                    corners.push(Corner {
+                        vertex: v,
+                        edge: NO_EDGE,
+                        flags: REPORT_VERTEX,
+                    });
+                }
+            }
+            let len = corners.len() as u32 - start;
+            let (normal, offset) = match b.face_plane(f) {
+                Some(p) => (p.normal, p.offset),
+                None => (DVec3::ZERO, 0.0),
+            };
+            let (i, j) = drop_axis(normal);
+            boxes.push(Aabb::of_points(
+                corners[start as usize..]
+                    .iter()
+                    .map(|c| points[c.vertex as usize]),
+            ));
+            faces.push(FaceRec {
+                normal,
+                offset,
+                axes: (i as u8, j as u8),
+                start,
+                len,
+                serial: b.face_serial(f).get(),
+            });
+        }
+        let bvh = Bvh::build(&boxes);
+        // Lay faces and their corners out in leaf order.
+        let mut ordered = Vec::with_capacity(faces.len());
+        let mut ordered_corners = Vec::with_capacity(corners.len());
+        for &i in bvh.order() {
+            let mut f = faces[i as usize];
+            let s = f.start as usize;
+            f.start = ordered_corners.len() as u32;
+            ordered_corners.extend_from_slice(&corners[s..s + f.len as usize]);
+            ordered.push(f);
+        }
+        let bounds = Aabb::of_points(points.iter().copied());
+        let size = if bounds.is_empty() {
+            0.0
+        } else {
+            (bounds.max - bounds.min).length()
+        };
+        BodyShape {
+            body,
+            points,
+            vertex_serials,
+            edge_serials,
+            faces: ordered,
+            corners: ordered_corners,
+            bvh,
+            bounds,
+            size,
+        }
+    }
+
+    /// The body this shape was built from.
+    pub fn body(&self) -> &Arc<Body> {
+        &self.body
+    }
+
+    /// Heap bytes held by the shape (not counting the body).
+    pub fn heap_bytes(&self) -> usize {
+        self.points.capacity() * 24
+            + (self.vertex_serials.capacity() + self.edge_serials.capacity()) * 8
+            + self.faces.capacity() * std::mem::size_of::<FaceRec>()
+            + self.corners.capacity() * std::mem::size_of::<Corner>()
+            + self.bvh.heap_bytes()
+    }
+
+    /// Face `k`'s corners.
+    #[inline]
+    pub fn corners_of(&self, k: usize) -> &[Corner] {
+        let f = &self.faces[k];
+        &self.corners[f.start as usize..(f.start + f.len) as usize]
+    }
+
+    /// Face `k`'s perimeter loci, in order.
+    #[inline]
+    pub fn loop_points(&self, k: usize) -> impl Iterator<Item = DVec3> + Clone + '_ {
+        self.corners_of(k)
+            .iter()
+            .map(|c| self.points[c.vertex as usize])
+    }
+
+    /// The point of face `k` closest to `p`.
+    pub fn closest_on_face(&self, k: usize, p: DVec3) -> Closest {
+        let f = &self.faces[k];
+        let cs = self.corners_of(k);
+        let pd = f.normal.dot(p) - f.offset;
+        let mut best = Closest {
+            d2: f64::INFINITY,
+            point: p,
+            interior: false,
+            plane_distance: pd,
+        };
+        for (i, c) in cs.iter().enumerate() {
+            let a = self.points[c.vertex as usize];
+            let b = self.points[cs[(i + 1) % cs.len()].vertex as usize];
+            let (d2, q) = segment_closest(p, a, b);
+            if d2 < best.d2 {
+                best.d2 = d2;
+                best.point = q;
+            }
+        }
+        if f.normal != DVec3::ZERO && pd * pd < best.d2 {
+            let foot = p - f.normal * pd;
+            let axes = (f.axes.0 as usize, f.axes.1 as usize);
+            if in_polygon(foot, self.loop_points(k), axes) {
+                best.d2 = pd * pd;
+                best.point = foot;
+                best.interior = true;
+            }
+        }
+        best
+    }
+
+    /// Where the ray `o + t·d` crosses face `k` (t ≥ 0), if it does, and how far the
+    /// crossing is from the face's perimeter (small margins make parity untrustworthy).
+    pub fn ray_face(&self, k: usize, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+        let f = &self.faces[k];
+        let denom = f.normal.dot(d);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = (f.offset - f.normal.dot(o)) / denom;
+        if !(t >= 0.0) {
+            return None;
+        }
+        let h = o + d * t;
+        let axes = (f.axes.0 as usize, f.axes.1 as usize);
+        in_polygon(h, self.loop_points(k), axes)
+            .then(|| (t, boundary_margin(h, self.loop_points(k))))
+    }
+
+    /// Whether `p` is inside the closed body (on its surface counts as inside), by the
+    /// parity of a ray's crossings; a ray passing too near an edge, or along a face, is
+    /// cast again in another direction.
+    pub fn contains(&self, p: DVec3) -> bool {
+        if !self.bounds.contains_point(p) {
+            return false;
+        }
+        let eps = self.size * 1e-9;
+        for d in PROBES {
+            let d = DVec3::from_array(d).normalize();
+            let mut crossings = 0u32;
+            let mut doubtful = false;
+            let mut on_surface = false;
+            self.bvh.ray(p, d, f64::INFINITY, |k, t_best| {
+                let f = &self.faces[k];
+                let pd = f.normal.dot(p) - f.offset;
+                if f.normal.dot(d).abs() < 1e-9 && pd.abs() <= eps {
+                    // Running along a face's plane: parity means nothing.
+                    let axes = (f.axes.0 as usize, f.axes.1 as usize);
+                    if in_polygon(p, self.loop_points(k), axes)
+                        || boundary_margin(p, self.loop_points(k)) <= eps
+                    {
+                        on_surface |= pd == 0.0;
+                    }
+                    doubtful = true;
+                    return t_best;
+                }
+                if let Some((t, margin)) = self.ray_face(k, p, d) {
+                    if t * f.normal.dot(d).abs() <= eps {
+                        on_surface = true;
+                    }
+                    if margin <= eps {
+                        doubtful = true;
+                    }
+                    crossings += 1;
+                }
+                t_best
+            });
+            if on_surface {
+                return true;
+            }
+            if !doubtful {
+                return crossings % 2 == 1;
+            }
+        }
+        // Every probe grazed something: take the closest face's side.
+        let best = self.nearest_face(p, f64::INFINITY);
+        best.is_some_and(|(_, c)| c.plane_distance <= 0.0)
+    }
+
+    /// The face closest to `p` within squared distance `bound2`, with where on it.
+    pub fn nearest_face(&self, p: DVec3, bound2: f64) -> Option<(usize, Closest)> {
+        let mut found: Option<(usize, Closest)> = None;
+        self.bvh.nearest(p, bound2, |k, best| {
+            let c = self.closest_on_face(k, p);
+            if c.d2 < best || (c.d2 == best && found.is_none()) {
+                found = Some((k, c));
+                c.d2
+            } else {
+                best
+            }
+        });
+        found
+    }
+}
+
+/// Directions tried in turn by [`BodyShape::contains`]: skew to every axis and every
+/// diagonal, so that axis-aligned models rarely graze an edge.
+const PROBES: [[f64; 3]; 6] = [
+    [0.577_215_664_9, 0.301_029_995_6, 0.759_134_123_1],
+    [-0.414_213_562_3, 0.865_255_979_4, 0.281_718_171_5],
+    [0.692_147_180_5, -0.367_879_441_2, -0.620_981_038_7],
+    [-0.318_309_886_2, -0.779_482_100_2, 0.539_423_105_3],
+    [0.852_395_851_1, 0.123_456_789_1, -0.508_295_867_4],
+    [-0.231_049_060_2, 0.105_360_515_7, -0.967_078_543_2],
+];
