@@ -381,8 +381,13 @@ pub fn chord_angle(rho: f64, tolerance: f64) -> f64 {
 /// circle at most, for a requested `tolerance` (more than asked only when the arc would
 /// need more than [`MAX_ARC_POINTS`] points).
 pub fn achieved_tolerance(rho: f64, tolerance: f64) -> f64 {
-    let step = chord_angle(rho, tolerance).max(std::f64::consts::TAU / MAX_ARC_POINTS as f64);
-    rho * (1.0 - (step * 0.5).cos())
+    let wanted = chord_angle(rho, tolerance);
+    let least = std::f64::consts::TAU / MAX_ARC_POINTS as f64;
+    if wanted >= least {
+        // The chords are as asked (their sagitta is at most the tolerance, up to rounding).
+        return tolerance.min(rho);
+    }
+    rho * (1.0 - (least * 0.5).cos())
 }
 
 /// Crossing-count point-in-polygon in 2D.
