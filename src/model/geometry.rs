@@ -57,6 +57,27 @@ pub fn line_coefficients(p1: DVec2, p2: DVec2) -> Option<(f64, f64, f64)> {
     (l > 0.0).then(|| (aa / l, bb / l, cc / l))
 }
 
+/// Even-odd rule: whether `p` lies inside the closed polygon `poly` (by the parity of
+/// the edges a ray toward +x crosses). Points on the boundary may answer either way; a
+/// segment walked twice (a bridge or a spur) cancels itself.
+pub fn point_in_polygon(p: DVec2, poly: &[DVec2]) -> bool {
+    let Some(&last) = poly.last() else {
+        return false;
+    };
+    let mut odd = false;
+    let mut prev = last;
+    for &q in poly {
+        if (prev.y > p.y) != (q.y > p.y) {
+            let x = prev.x + (p.y - prev.y) * (q.x - prev.x) / (q.y - prev.y);
+            if p.x < x {
+                odd = !odd;
+            }
+        }
+        prev = q;
+    }
+    odd
+}
+
 impl Body {
     /// Newell's area vector of face `f`: its direction is the outward normal and its
     /// length twice the face's area. Right for concave and slightly non-planar faces.

@@ -657,19 +657,7 @@ fn at_least(x: f64, min: f64) -> bool {
 
 /// Even-odd rule: whether pixel `q` lies inside the polygon `poly`.
 fn inside(poly: &[DVec2], q: DVec2) -> bool {
-    let mut odd = false;
-    let mut j = poly.len() - 1;
-    for i in 0..poly.len() {
-        let (a, b) = (poly[j], poly[i]);
-        if (a.y > q.y) != (b.y > q.y) {
-            let x = a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y);
-            if q.x < x {
-                odd = !odd;
-            }
-        }
-        j = i;
-    }
-    odd
+    crate::model::geometry::point_in_polygon(q, poly)
 }
 
 /// What every edge's work shares.

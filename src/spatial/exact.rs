@@ -9,6 +9,8 @@
 
 use glam::{DVec2, DVec3};
 
+use crate::model::geometry::point_in_polygon;
+
 /// The parameters `[t0, t1] ⊆ [0, 1]` of the part of segment `a`–`b` inside the closed
 /// ball of centre `c` and radius `r` (the roots of |a + t(b − a) − c|² = r², clipped),
 /// or `None` when the segment misses the ball.
@@ -300,7 +302,7 @@ pub fn polygon_disc(poly: &[DVec2], rho: f64, tolerance: f64) -> Vec<Vec<DVec2>>
         }
     }
     if runs.is_empty() {
-        if in_polygon_2d(DVec2::ZERO, poly) {
+        if point_in_polygon(DVec2::ZERO, poly) {
             return vec![circle_arc(
                 rho,
                 0.0,
@@ -388,22 +390,6 @@ pub fn achieved_tolerance(rho: f64, tolerance: f64) -> f64 {
         return tolerance.min(rho);
     }
     rho * (1.0 - (least * 0.5).cos())
-}
-
-/// Crossing-count point-in-polygon in 2D.
-fn in_polygon_2d(p: DVec2, poly: &[DVec2]) -> bool {
-    let mut inside = false;
-    let mut prev = poly[poly.len() - 1];
-    for &q in poly {
-        if (prev.y > p.y) != (q.y > p.y) {
-            let x = prev.x + (p.y - prev.y) * (q.x - prev.x) / (q.y - prev.y);
-            if p.x < x {
-                inside = !inside;
-            }
-        }
-        prev = q;
-    }
-    inside
 }
 
 #[cfg(test)]

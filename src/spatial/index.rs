@@ -291,36 +291,30 @@ impl Spatial {
         }
     }
 
-    fn hit(&self, e: &Entry, distance: Option<f64>, inside: bool, f: Option<Features>) -> BodyHit {
-        let (faces, edges, vertices) = match f {
-            Some(f) => (Some(f.faces), Some(f.edges), Some(f.vertices)),
-            None => (None, None, None),
-        };
+    /// A body's entry in an answer, its features still to come.
+    fn hit(&self, e: &Entry, distance: Option<f64>, inside: bool) -> BodyHit {
         BodyHit {
             id: e.id.get(),
             name: self.world.name(e.id).map(str::to_owned),
             distance,
             inside,
-            faces,
-            edges,
-            vertices,
+            faces: None,
+            edges: None,
+            vertices: None,
         }
     }
 
     /// The bodies reaching into a ball, with what of them is inside it.
     pub fn sphere(&self, q: &SphereQuery) -> Result<SphereAnswer, QueryError> {
         q.validate()?;
-        let mut bodies = Vec::new();
-        let mut count = 0usize;
-        let mut tolerance: f64 = 0.0;
-        let mut too_many = false;
+        let mut hits = Hits::new(q.detail, q.max_features);
         self.entries_within(q.center, cull_radius2(q.radius), |e| {
-            if too_many {
+            if hits.full {
                 return;
             }
             let mut f = Features::default();
             let c = e.inverse.transform_point(q.center);
-            let Some((distance, inside)) = reach::ball(
+            if let Some((distance, inside)) = reach::ball(
                 &e.shape,
                 &e.pose,
                 c,
@@ -328,24 +322,12 @@ impl Spatial {
                 q.detail,
                 q.tolerance,
                 &mut f,
-            ) else {
-                return;
-            };
-            count += f.count();
-            if count > q.max_features {
-                too_many = true;
-                return;
+            ) {
+                hits.push(self.hit(e, Some(distance), inside), f);
             }
-            tolerance = tolerance.max(f.tolerance);
-            f.sort();
-            let f = (q.detail != Detail::Bodies).then_some(f);
-            bodies.push(self.hit(e, Some(distance), inside, f));
         });
-        if too_many {
-            return Err(QueryError::TooManyFeatures {
-                limit: q.max_features,
-            });
-        }
+        let tolerance = hits.tolerance;
+        let mut bodies = hits.finish()?;
         bodies.sort_by(|a, b| {
             a.distance
                 .unwrap_or(0.0)
@@ -366,27 +348,18 @@ impl Spatial {
     pub fn aabb(&self, q: &BoxQuery) -> Result<BoxAnswer, QueryError> {
         q.validate()?;
         let region = Aabb::new(q.min, q.max);
-        let mut bodies = Vec::new();
-        let mut count = 0usize;
-        let mut too_many = false;
+        let mut hits = Hits::new(q.detail, q.max_features);
         let mut visit = |e: &Entry| {
-            if too_many || !e.bounds.overlaps(&region) {
+            if hits.full || !e.bounds.overlaps(&region) {
                 return;
             }
             let mut f = Features::default();
-            let Some(inside) = reach::aabb(
-                &e.shape, &e.pose, &e.inverse, q.min, q.max, q.detail, &mut f,
-            ) else {
-                return;
-            };
-            count += f.count();
-            if count > q.max_features {
-                too_many = true;
-                return;
+            let (lo, hi) = (q.min, q.max);
+            if let Some(inside) =
+                reach::aabb(&e.shape, &e.pose, &e.inverse, lo, hi, q.detail, &mut f)
+            {
+                hits.push(self.hit(e, None, inside), f);
             }
-            f.sort();
-            let f = (q.detail != Detail::Bodies).then_some(f);
-            bodies.push(self.hit(e, None, inside, f));
         };
         let order = self.bvh.order();
         self.bvh
@@ -394,11 +367,7 @@ impl Spatial {
         for &i in &self.loose {
             visit(&self.entries[i as usize]);
         }
-        if too_many {
-            return Err(QueryError::TooManyFeatures {
-                limit: q.max_features,
-            });
-        }
+        let mut bodies = hits.finish()?;
         bodies.sort_by_key(|b| b.id);
         Ok(BoxAnswer {
             revision: self.revision(),
@@ -521,6 +490,56 @@ impl Spatial {
             revision: self.revision(),
             hit,
         })
+    }
+}
+
+/// The bodies a region query found, within its budget of features.
+struct Hits {
+    detail: Detail,
+    bodies: Vec<BodyHit>,
+    features: usize,
+    limit: usize,
+    /// Whether the budget ran out (the query is refused).
+    full: bool,
+    /// The largest chord deviation of the portions drawn.
+    tolerance: f64,
+}
+
+impl Hits {
+    fn new(detail: Detail, limit: usize) -> Hits {
+        Hits {
+            detail,
+            bodies: Vec::new(),
+            features: 0,
+            limit,
+            full: false,
+            tolerance: 0.0,
+        }
+    }
+
+    /// Adds a body with its features (sorted by id; dropped at `bodies` detail).
+    fn push(&mut self, mut hit: BodyHit, mut f: Features) {
+        self.features += f.count();
+        if self.features > self.limit {
+            self.full = true;
+            return;
+        }
+        self.tolerance = self.tolerance.max(f.tolerance);
+        if self.detail != Detail::Bodies {
+            f.sort();
+            hit.faces = Some(f.faces);
+            hit.edges = Some(f.edges);
+            hit.vertices = Some(f.vertices);
+        }
+        self.bodies.push(hit);
+    }
+
+    /// The bodies, or the refusal when there were too many features.
+    fn finish(self) -> Result<Vec<BodyHit>, QueryError> {
+        if self.full {
+            return Err(QueryError::TooManyFeatures { limit: self.limit });
+        }
+        Ok(self.bodies)
     }
 }
 

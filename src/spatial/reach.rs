@@ -9,7 +9,7 @@ use super::exact::{
     polygon_disc,
 };
 use super::query::{Detail, EdgeHit, FaceHit, VertexHit};
-use super::shape::{BodyShape, Closest, NO_EDGE, REPORT_EDGE, REPORT_VERTEX};
+use super::shape::{BodyShape, Closest, Corner, NO_EDGE, REPORT_EDGE, REPORT_VERTEX};
 use crate::model::Pose;
 
 /// The features of one body found by a query, in world coordinates.
@@ -72,23 +72,17 @@ pub fn ball(
                 continue;
             };
             meets = true;
-            if !features {
-                continue;
-            }
-            if corner.flags & REPORT_EDGE != 0 && corner.edge != NO_EDGE {
-                out.edges.push(EdgeHit {
-                    id: shape.edge_serials[corner.edge as usize],
-                    segment: [
-                        pose.transform_point(lerp_exact(a, b, t0)),
-                        pose.transform_point(lerp_exact(a, b, t1)),
-                    ],
-                });
-            }
-            if corner.flags & REPORT_VERTEX != 0 && (a - c).length_squared() <= r2 {
-                out.vertices.push(VertexHit {
-                    id: shape.vertex_serials[corner.vertex as usize],
-                    position: pose.transform_point(a),
-                });
+            if features {
+                let a_in = (a - c).length_squared() <= r2;
+                report(
+                    shape,
+                    corner,
+                    [a, b],
+                    (t0, t1),
+                    a_in,
+                    |p| pose.transform_point(p),
+                    out,
+                );
             }
         }
         let closest = shape.closest_on_face(k, c);
@@ -128,6 +122,33 @@ pub fn ball(
         }
         // No face meets the ball: either it is wholly inside the solid or apart from it.
         None => shape.contains(c).then_some((0.0, true)),
+    }
+}
+
+/// Appends what a perimeter corner reports of a region its segment `ab` enters over
+/// `t0..=t1`: its edge, clipped (if the corner is the edge's canonical one), and its
+/// starting vertex `a` when `a_in` (if the corner is the vertex's canonical one).
+/// `world` maps the segment's frame to the world.
+fn report(
+    shape: &BodyShape,
+    corner: &Corner,
+    [a, b]: [DVec3; 2],
+    (t0, t1): (f64, f64),
+    a_in: bool,
+    world: impl Fn(DVec3) -> DVec3,
+    out: &mut Features,
+) {
+    if corner.flags & REPORT_EDGE != 0 && corner.edge != NO_EDGE {
+        out.edges.push(EdgeHit {
+            id: shape.edge_serials[corner.edge as usize],
+            segment: [world(lerp_exact(a, b, t0)), world(lerp_exact(a, b, t1))],
+        });
+    }
+    if corner.flags & REPORT_VERTEX != 0 && a_in {
+        out.vertices.push(VertexHit {
+            id: shape.vertex_serials[corner.vertex as usize],
+            position: world(a),
+        });
     }
 }
 
@@ -189,20 +210,8 @@ pub fn aabb(
                 continue;
             };
             meets = true;
-            if !features {
-                continue;
-            }
-            if corner.flags & REPORT_EDGE != 0 && corner.edge != NO_EDGE {
-                out.edges.push(EdgeHit {
-                    id: shape.edge_serials[corner.edge as usize],
-                    segment: [lerp_exact(a, b, t0), lerp_exact(a, b, t1)],
-                });
-            }
-            if corner.flags & REPORT_VERTEX != 0 && in_box(a) {
-                out.vertices.push(VertexHit {
-                    id: shape.vertex_serials[corner.vertex as usize],
-                    position: a,
-                });
+            if features {
+                report(shape, corner, [a, b], (t0, t1), in_box(a), |p| p, out);
             }
         }
         let clipped =
