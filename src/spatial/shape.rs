@@ -282,6 +282,14 @@ impl BodyShape {
             return false;
         }
         let eps = self.size * 1e-9;
+        // On an edge or at a vertex a point is on no face's interior, which the crossing
+        // count cannot see: a point on the surface is found first, as inside.
+        if self
+            .nearest_face(p, eps * eps)
+            .is_some_and(|(_, c)| c.d2 <= eps * eps)
+        {
+            return true;
+        }
         for d in PROBES {
             let d = DVec3::from_array(d).normalize();
             let mut crossings = 0u32;
