@@ -85,10 +85,14 @@ impl SpatialAccess {
             return ask(s);
         }
         let mut g = self.write();
+        // The snapshot the index leaves behind, freed once the lock is released: it may
+        // be the last reference to a world of many bodies.
+        let mut retired = None;
         let index = match g.take() {
             None => build(world),
             Some(mut s) => {
                 if s.revision() < target {
+                    retired = Some(s.world().clone());
                     bring_up(&mut s, world, feed);
                 }
                 s
@@ -96,7 +100,10 @@ impl SpatialAccess {
         };
         // Answered under the write lock: the index cannot be dropped between the update
         // and the question, and the readers queued behind it are released right after.
-        ask(g.insert(index))
+        let answer = ask(g.insert(index));
+        drop(g);
+        drop(retired);
+        answer
     }
 
     /// The write lock; a poisoned index (a panic while it was being changed) is dropped,
