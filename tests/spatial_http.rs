@@ -679,3 +679,74 @@ fn bad_requests_are_problems_and_change_nothing() {
         .ok();
     assert_eq!(big, a);
 }
+
+#[test]
+fn concurrent_queries_see_each_revision_as_it_was() {
+    use std::collections::BTreeMap;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    let s = TestServer::start();
+    let a = add_box(&s, "a", [0.0; 3]);
+    // Where a is at each revision from its creation on: x = 0 or x = 10.
+    let mut at: BTreeMap<u64, f64> = BTreeMap::new();
+    at.insert(revision(&s), 0.0);
+    let done = AtomicBool::new(false);
+    let url = s.url("/v1/spatial/sphere?x=0&y=0&z=0&r=0.5&detail=bodies");
+    let seen: Vec<(u64, bool, String)> = std::thread::scope(|scope| {
+        let askers: Vec<_> = (0..3)
+            .map(|_| {
+                let agent = s.agent();
+                let (url, done) = (&url, &done);
+                scope.spawn(move || {
+                    let mut seen = Vec::new();
+                    while !done.load(Ordering::Relaxed) {
+                        let mut res = agent.get(url).call().expect("an answer");
+                        assert_eq!(res.status(), 200);
+                        let etag = res
+                            .headers()
+                            .get("etag")
+                            .and_then(|v| v.to_str().ok())
+                            .unwrap_or_default()
+                            .to_owned();
+                        let v: Value = res.body_mut().read_json().expect("JSON");
+                        let rev = v["revision"].as_u64().expect("a revision");
+                        let found = !v["bodies"].as_array().expect("bodies").is_empty();
+                        assert_eq!(etag, format!("\"{rev}\""));
+                        seen.push((rev, found, v.to_string()));
+                    }
+                    seen
+                })
+            })
+            .collect();
+        for k in 1..=30 {
+            let x = if k % 2 == 1 { 10.0 } else { 0.0 };
+            let r = s.patch(
+                &format!("/v1/bodies/{a}"),
+                &json!({"pose": {"position": [x, 0, 0]}}),
+            );
+            at.insert(r.ok()["revision"].as_u64().expect("a revision"), x);
+        }
+        done.store(true, Ordering::Relaxed);
+        askers
+            .into_iter()
+            .flat_map(|h| h.join().expect("an asker"))
+            .collect()
+    });
+    assert!(!seen.is_empty());
+    for (rev, found, answer) in &seen {
+        let x = at
+            .get(rev)
+            .unwrap_or_else(|| panic!("revision {rev} is no write's: {answer}"));
+        assert_eq!(
+            *found,
+            *x == 0.0,
+            "at revision {rev} a is at x = {x}: {answer}"
+        );
+    }
+    let last = *at.keys().last().expect("revisions");
+    let now = s
+        .get("/v1/spatial/sphere?x=0&y=0&z=0&r=0.5&detail=bodies")
+        .ok();
+    assert_eq!(now["revision"], last);
+    assert_eq!(ids(&now["bodies"]), vec![a]);
+}

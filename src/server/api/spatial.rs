@@ -325,6 +325,7 @@ struct Names {
     min: [&'static str; 3],
     max: [&'static str; 3],
     direction: &'static str,
+    zero_direction: &'static str,
 }
 
 const JSON_NAMES: Names = Names {
@@ -333,6 +334,7 @@ const JSON_NAMES: Names = Names {
     min: ["min[0]", "min[1]", "min[2]"],
     max: ["max[0]", "max[1]", "max[2]"],
     direction: "direction",
+    zero_direction: "direction must not be [0, 0, 0]",
 };
 
 const QUERY_NAMES: Names = Names {
@@ -341,6 +343,7 @@ const QUERY_NAMES: Names = Names {
     min: ["min_x", "min_y", "min_z"],
     max: ["max_x", "max_y", "max_z"],
     direction: "dx, dy and dz",
+    zero_direction: "dx, dy and dz must not all be zero",
 };
 
 /// 422 `invalid-query`.
@@ -377,7 +380,7 @@ fn point(v: [f64; 3], name: &str) -> Result<DVec3, Problem> {
         Ok(p)
     } else {
         Err(invalid(format!(
-            "{name} must be finite numbers (got [{}, {}, {}])",
+            "{name} must be finite (got [{}, {}, {}])",
             v[0], v[1], v[2]
         )))
     }
@@ -465,8 +468,8 @@ fn direction(v: [f64; 3], names: &Names) -> Result<DVec3, Problem> {
     let m = d.abs().max_element();
     if m == 0.0 {
         return Err(invalid(format!(
-            "{} must not all be zero: a ray needs a direction",
-            names.direction
+            "{}: a ray needs a direction",
+            names.zero_direction
         )));
     }
     Ok(d / m)
