@@ -66,14 +66,6 @@ impl SpatialAccess {
         }
     }
 
-    /// The revision the index describes, if it is built.
-    pub fn revision(&self) -> Option<u64> {
-        self.index
-            .read()
-            .ok()
-            .and_then(|g| g.as_ref().map(Spatial::revision))
-    }
-
     /// Answers `ask` from an index at `world`'s revision or later, bringing the index up
     /// first if it is behind. Blocking: call off the async threads.
     fn answer<T>(&self, world: Arc<World>, feed: &Feed, ask: impl FnOnce(&Spatial) -> T) -> T {
