@@ -141,8 +141,12 @@ fn every_guarded_route_refuses_missing_and_too_weak_tokens() {
         }
         let needs = if template.starts_with("/v1/admin") {
             "admin"
-        } else if method == "GET" || template == "/v1/appearance" {
-            // POST /v1/appearance draws; it changes nothing and needs only the read role.
+        } else if method == "GET"
+            || template == "/v1/appearance"
+            || template.starts_with("/v1/spatial/")
+        {
+            // POST /v1/appearance draws and POST /v1/spatial/* query; they change
+            // nothing and need only the read role.
             "read"
         } else {
             "write"

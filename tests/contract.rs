@@ -507,7 +507,7 @@ impl Contract {
 
 /// Operations that use POST but only read.
 fn is_read(template: &str) -> bool {
-    template == "/v1/appearance"
+    template == "/v1/appearance" || template.starts_with("/v1/spatial/")
 }
 
 fn matches_template(template: &str, path: &str) -> bool {
@@ -570,6 +570,7 @@ fn answers_match_the_contract() {
     sweeps_duals_everts_copies(&c);
     cameras(&c);
     appearance(&c);
+    spatial(&c);
     lights(&c);
     deletes(&c);
     following(&c, start);
@@ -1429,6 +1430,138 @@ fn appearance(c: &Contract) {
                                          "cx": 4, "cy": 4}}}),
         422,
         Spec::Either,
+    );
+}
+
+fn spatial(c: &Contract) {
+    let (sphere, boxed, nearest, ray) = (
+        "/v1/spatial/sphere",
+        "/v1/spatial/box",
+        "/v1/spatial/nearest",
+        "/v1/spatial/ray",
+    );
+    // A read: the revision stays, and GET and POST answer alike.
+    let before = c.revision();
+    let got = c.ok("GET", sphere, "/v1/spatial/sphere?x=0&y=0&z=0.5&r=3", None);
+    assert_eq!(got["revision"], before, "{got}");
+    assert!(
+        !got["bodies"].as_array().expect("bodies").is_empty(),
+        "{got}"
+    );
+    let posted = c.ok(
+        "POST",
+        sphere,
+        sphere,
+        Some(json!({"center": [0, 0, 0.5], "radius": 3})),
+    );
+    assert_eq!(posted, got);
+    c.ok(
+        "POST",
+        sphere,
+        sphere,
+        Some(json!({"center": [0, 0, 0.5], "radius": 1, "detail": "portions", "tolerance": 0.01})),
+    );
+    c.ok(
+        "GET",
+        sphere,
+        "/v1/spatial/sphere?x=0&y=0&z=0&r=1&detail=bodies&max_features=10",
+        None,
+    );
+    c.ok(
+        "GET",
+        boxed,
+        "/v1/spatial/box?min_x=-1&min_y=-1&min_z=0&max_x=1&max_y=1&max_z=1&detail=portions",
+        None,
+    );
+    c.ok(
+        "POST",
+        boxed,
+        boxed,
+        Some(json!({"min": [-1, -1, 0], "max": [1, 1, 1], "detail": "features"})),
+    );
+    let n = c.ok("GET", nearest, "/v1/spatial/nearest?x=0&y=0&z=10", None);
+    assert!(n["hit"]["id"].is_u64(), "{n}");
+    let none = c.ok(
+        "POST",
+        nearest,
+        nearest,
+        Some(json!({"point": [0, 0, 1000], "max_distance": 1})),
+    );
+    assert!(none["hit"].is_null(), "{none}");
+    let down = c.ok(
+        "GET",
+        ray,
+        "/v1/spatial/ray?x=0&y=0&z=10&dx=0&dy=0&dz=-1",
+        None,
+    );
+    assert!(down["hit"]["face"].is_u64(), "{down}");
+    let up = c.ok(
+        "POST",
+        ray,
+        ray,
+        Some(json!({"origin": [0, 0, 100], "direction": [0, 0, 1]})),
+    );
+    assert!(up["hit"].is_null(), "{up}");
+    assert_eq!(c.revision(), before, "spatial queries are reads");
+
+    let nan = "/v1/spatial/sphere?x=NaN&y=0&z=0&r=1";
+    c.refused("GET", sphere, nan, Send::Nothing, 422, Spec::Either);
+    let missing = "/v1/spatial/sphere?x=0&y=0&z=0";
+    c.refused("GET", sphere, missing, Send::Nothing, 400, Spec::Either);
+    c.refused_json(
+        "POST",
+        sphere,
+        sphere,
+        json!({"center": [0, 0, 0], "radius": -1}),
+        422,
+        Spec::Either,
+    );
+    c.refused_json(
+        "POST",
+        sphere,
+        sphere,
+        json!({"center": [0, 0, 0], "radius": 1, "colour": "red"}),
+        400,
+        Spec::Refuses,
+    );
+    let many = c.refused_json(
+        "POST",
+        sphere,
+        sphere,
+        json!({"center": [0, 0, 0.5], "radius": 3, "max_features": 1}),
+        422,
+        Spec::Either,
+    );
+    assert_eq!(many["type"], "urn:winged:problem:too-many-features");
+    let empty = "/v1/spatial/box?min_x=1&min_y=0&min_z=0&max_x=0&max_y=1&max_z=1";
+    c.refused("GET", boxed, empty, Send::Nothing, 422, Spec::Either);
+    c.refused_json(
+        "POST",
+        boxed,
+        boxed,
+        json!({"min": [0, 0], "max": [1, 1, 1]}),
+        400,
+        Spec::Refuses,
+    );
+    let far = "/v1/spatial/nearest?x=0&y=0&z=0&max_distance=-1";
+    c.refused("GET", nearest, far, Send::Nothing, 422, Spec::Either);
+    c.refused_json(
+        "POST",
+        nearest,
+        nearest,
+        json!({"point": [0, 0, 0], "near": true}),
+        400,
+        Spec::Refuses,
+    );
+    let zero = "/v1/spatial/ray?x=0&y=0&z=0&dx=0&dy=0&dz=0";
+    c.refused("GET", ray, zero, Send::Nothing, 422, Spec::Either);
+    c.refused_json(
+        "POST",
+        ray,
+        ray,
+        json!({"origin": [0, 0, 0]}),
+        400,
+        Spec::Refuses,
     );
 }
 

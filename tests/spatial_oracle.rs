@@ -723,3 +723,19 @@ fn a_face_cut_by_a_sphere_has_the_disc_or_half_disc_as_its_portion() {
         );
     }
 }
+
+#[test]
+fn a_body_limit_refuses_an_answer_over_it() {
+    let w = Arc::new(random_world(2, 40));
+    let index = Spatial::build(w);
+    let mut q = SphereQuery::new(DVec3::ZERO, 30.0).with_detail(Detail::Bodies);
+    let all = index.sphere(&q).expect("no limit").bodies.len();
+    assert!(all > 10);
+    q.max_bodies = all;
+    assert_eq!(index.sphere(&q).expect("at the limit").bodies.len(), all);
+    q.max_bodies = all - 1;
+    assert_eq!(
+        index.sphere(&q),
+        Err(winged::spatial::QueryError::TooManyBodies { limit: all - 1 })
+    );
+}

@@ -2,6 +2,7 @@
 # HTTP benchmarks of `winged serve`, end to end: builds the release binary and the
 # read_latency example, starts servers on loopback (ephemeral ports), runs the loads,
 # stops the servers. Figures and discussion: BENCHMARKS.md, "Server".
+# Spatial queries have their own run: bench/http/spatial.sh.
 #
 #   bash bench/http/run.sh              # 10 s per wrk run, 20 s latency phase
 #   SECONDS_PER_RUN=5 bash bench/http/run.sh

@@ -132,6 +132,7 @@ pub fn build<J: Journal>(
         tokens,
         metrics: metrics.clone(),
         appearance: Arc::new(api::appearance::Appearance::new(limits.max_render_pixels)),
+        spatial: Arc::new(api::spatial::SpatialAccess::new()),
     };
     let one_line_per_request = TraceLayer::new_for_http()
         .make_span_with(DefaultMakeSpan::new().level(Level::INFO))

@@ -100,8 +100,12 @@ impl Aabb {
         d.length_squared()
     }
 
-    /// Where the ray `o + t·d` (t ≥ 0) first enters the box, or `None`.
+    /// Where the ray `o + t·d` (t ≥ 0) first enters the box, or `None` (always for the
+    /// empty box).
     pub fn ray_entry(&self, o: DVec3, d: DVec3) -> Option<f64> {
+        if self.is_empty() {
+            return None;
+        }
         let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
         for k in 0..3 {
             if d[k] == 0.0 {

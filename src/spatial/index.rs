@@ -307,7 +307,7 @@ impl Spatial {
     /// The bodies reaching into a ball, with what of them is inside it.
     pub fn sphere(&self, q: &SphereQuery) -> Result<SphereAnswer, QueryError> {
         q.validate()?;
-        let mut hits = Hits::new(q.detail, q.max_features);
+        let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies);
         self.entries_within(q.center, cull_radius2(q.radius), |e| {
             if hits.full {
                 return;
@@ -348,7 +348,7 @@ impl Spatial {
     pub fn aabb(&self, q: &BoxQuery) -> Result<BoxAnswer, QueryError> {
         q.validate()?;
         let region = Aabb::new(q.min, q.max);
-        let mut hits = Hits::new(q.detail, q.max_features);
+        let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies);
         let mut visit = |e: &Entry| {
             if hits.full || !e.bounds.overlaps(&region) {
                 return;
@@ -385,7 +385,9 @@ impl Spatial {
         let mut best: Option<Nearest> = None;
         let bound = max_distance * max_distance;
         let mut consider = |e: &Entry, best2: f64| -> f64 {
-            if e.bounds.distance_squared(point) > best2 {
+            // A removed body's entry stays in its leaf (with empty bounds, at an infinite
+            // distance) until the next rebuild; with no limit, that is not beyond `best2`.
+            if e.bounds.is_empty() || e.bounds.distance_squared(point) > best2 {
                 return best2;
             }
             let c = e.inverse.transform_point(point);
@@ -499,6 +501,7 @@ struct Hits {
     bodies: Vec<BodyHit>,
     features: usize,
     limit: usize,
+    max_bodies: usize,
     /// Whether the budget ran out (the query is refused).
     full: bool,
     /// The largest chord deviation of the portions drawn.
@@ -506,12 +509,13 @@ struct Hits {
 }
 
 impl Hits {
-    fn new(detail: Detail, limit: usize) -> Hits {
+    fn new(detail: Detail, limit: usize, max_bodies: usize) -> Hits {
         Hits {
             detail,
             bodies: Vec::new(),
             features: 0,
             limit,
+            max_bodies,
             full: false,
             tolerance: 0.0,
         }
@@ -520,7 +524,7 @@ impl Hits {
     /// Adds a body with its features (sorted by id; dropped at `bodies` detail).
     fn push(&mut self, mut hit: BodyHit, mut f: Features) {
         self.features += f.count();
-        if self.features > self.limit {
+        if self.features > self.limit || self.bodies.len() >= self.max_bodies {
             self.full = true;
             return;
         }
@@ -536,8 +540,13 @@ impl Hits {
 
     /// The bodies, or the refusal when there were too many features.
     fn finish(self) -> Result<Vec<BodyHit>, QueryError> {
-        if self.full {
+        if self.full && self.features > self.limit {
             return Err(QueryError::TooManyFeatures { limit: self.limit });
+        }
+        if self.full {
+            return Err(QueryError::TooManyBodies {
+                limit: self.max_bodies,
+            });
         }
         Ok(self.bodies)
     }
@@ -551,5 +560,63 @@ fn entry(id: BodyId, shape: Arc<BodyShape>, pose: Pose) -> Entry {
         shape,
         pose,
         bounds,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::solids;
+
+    /// Two 2 × 2 × 2 boxes, at the origin and at (5, 0, 0).
+    fn two_boxes() -> (World, BodyId, BodyId) {
+        let mut w = World::new();
+        let root = w.root();
+        let at = |w: &mut World, x: f64| {
+            w.insert_with(
+                None,
+                root,
+                Pose::from_translation(DVec3::new(x, 0.0, 0.0)),
+                |s| solids::mkcube(s, 2.0, 2.0, 2.0),
+            )
+            .expect("a box")
+        };
+        let a = at(&mut w, 0.0);
+        let b = at(&mut w, 5.0);
+        (w, a, b)
+    }
+
+    #[test]
+    fn a_removed_body_is_neither_nearest_nor_hit_before_the_rebuild() {
+        let (mut w, a, b) = two_boxes();
+        let mut s = Spatial::build(Arc::new(w.clone()));
+        w.kill(a).expect("killed");
+        let stats = s.sync(Arc::new(w), Some(&[a]));
+        assert_eq!((stats.removed, stats.rebuilt), (1, false));
+        let n = s.nearest(DVec3::ZERO, f64::INFINITY).expect("a query");
+        assert_eq!(n.hit.map(|h| h.id), Some(b.get()));
+        // A skew ray through where the removed box was.
+        let d = DVec3::new(1.0, 0.01, 0.02);
+        let r = s.ray(DVec3::new(-5.0, 0.0, 0.0), d, f64::INFINITY);
+        assert_eq!(r.expect("a query").hit.map(|h| h.id), Some(b.get()));
+    }
+
+    #[test]
+    fn a_centre_on_an_edge_or_at_a_vertex_is_inside() {
+        let (w, a, _) = two_boxes();
+        let s = Spatial::build(Arc::new(w));
+        for c in [
+            DVec3::ONE,
+            DVec3::new(1.0, 1.0, 0.3),
+            DVec3::new(1.0, 0.2, 0.3),
+        ] {
+            let q = SphereQuery::new(c, 0.5).with_detail(Detail::Bodies);
+            let hit = &s.sphere(&q).expect("a query").bodies[0];
+            assert_eq!(hit.id, a.get());
+            assert!(hit.inside, "{c}");
+            assert_eq!(hit.distance, Some(0.0), "{c}");
+            let n = s.nearest(c, f64::INFINITY).expect("a query").hit;
+            assert!(n.is_some_and(|n| n.inside && n.distance == 0.0), "{c}");
+        }
     }
 }

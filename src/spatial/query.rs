@@ -58,6 +58,12 @@ pub enum QueryError {
     /// The largest distance is negative.
     #[error("max_distance must be zero or more (got {0})")]
     NegativeDistance(f64),
+    /// The answer would hold more bodies than allowed.
+    #[error("the answer would hold more than {limit} bodies; ask for a smaller region")]
+    TooManyBodies {
+        /// The limit.
+        limit: usize,
+    },
     /// The answer would hold more features than allowed.
     #[error(
         "the answer would hold more than {limit} faces, edges and vertices; \
@@ -90,6 +96,8 @@ pub struct SphereQuery {
     pub tolerance: f64,
     /// The largest number of faces, edges and vertices in the answer.
     pub max_features: usize,
+    /// The largest number of bodies in the answer (no limit by default).
+    pub max_bodies: usize,
 }
 
 impl SphereQuery {
@@ -101,6 +109,7 @@ impl SphereQuery {
             detail: Detail::Features,
             tolerance: DEFAULT_TOLERANCE,
             max_features: DEFAULT_MAX_FEATURES,
+            max_bodies: usize::MAX,
         }
     }
 
@@ -138,6 +147,8 @@ pub struct BoxQuery {
     pub detail: Detail,
     /// The largest number of faces, edges and vertices in the answer.
     pub max_features: usize,
+    /// The largest number of bodies in the answer (no limit by default).
+    pub max_bodies: usize,
 }
 
 impl BoxQuery {
@@ -148,6 +159,7 @@ impl BoxQuery {
             max,
             detail: Detail::Features,
             max_features: DEFAULT_MAX_FEATURES,
+            max_bodies: usize::MAX,
         }
     }
 
@@ -186,7 +198,7 @@ pub fn validate_ray(
     finite(direction, "the direction's coordinates")?;
     validate_point(origin, max_distance)?;
     let len = direction.length();
-    if len.is_nan() || len <= 0.0 || !len.is_finite() {
+    if !len.is_finite() || len <= 0.0 {
         return Err(QueryError::ZeroDirection);
     }
     Ok(direction / len)

@@ -282,6 +282,14 @@ impl BodyShape {
             return false;
         }
         let eps = self.size * 1e-9;
+        // On an edge or at a vertex a point is on no face's interior, which the crossing
+        // count cannot see: a point on the surface is found first, as inside.
+        if self
+            .nearest_face(p, eps * eps)
+            .is_some_and(|(_, c)| c.d2 <= eps * eps)
+        {
+            return true;
+        }
         for d in PROBES {
             let d = DVec3::from_array(d).normalize();
             let mut crossings = 0u32;
@@ -341,7 +349,8 @@ impl BodyShape {
 }
 
 /// Directions tried in turn by [`BodyShape::contains`]: skew to every axis and every
-/// diagonal, so that axis-aligned models rarely graze an edge.
+/// diagonal, so that axis-aligned models rarely graze an edge. (The digits are those of
+/// familiar constants only as a source of unremarkable numbers.)
 const PROBES: [[f64; 3]; 6] = [
     [0.577_215_664_9, 0.311_029_995_6, 0.759_134_123_1],
     [-0.414_213_562_3, 0.865_255_979_4, 0.281_718_171_5],

@@ -9,6 +9,7 @@ mod feed;
 mod model;
 mod ops;
 pub mod precondition;
+pub mod spatial;
 
 use std::sync::Arc;
 
@@ -47,6 +48,8 @@ pub struct AppState {
     pub metrics: Arc<Metrics>,
     /// Scenes and turns for renderings.
     pub appearance: Arc<appearance::Appearance>,
+    /// The spatial index queries share.
+    pub spatial: Arc<spatial::SpatialAccess>,
 }
 
 impl FromRef<AppState> for Handle {
@@ -113,6 +116,22 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
             "/v1/cameras/{name}",
             reads(get(get_camera))
                 .merge(writes(axum::routing::put(put_camera).delete(delete_camera))),
+        )
+        .route(
+            "/v1/spatial/sphere",
+            reads(get(spatial::sphere_get).post(spatial::sphere_post)),
+        )
+        .route(
+            "/v1/spatial/box",
+            reads(get(spatial::box_get).post(spatial::box_post)),
+        )
+        .route(
+            "/v1/spatial/nearest",
+            reads(get(spatial::nearest_get).post(spatial::nearest_post)),
+        )
+        .route(
+            "/v1/spatial/ray",
+            reads(get(spatial::ray_get).post(spatial::ray_post)),
         )
         .route("/v1/lights", reads(get(list_lights)))
         .route(

@@ -1,0 +1,768 @@
+//! Spatial access over HTTP: `/v1/spatial/{sphere,box,nearest,ray}`, each as a `GET`
+//! with a query string and as a `POST` with a JSON body.
+//!
+//! One [`Spatial`] index is shared by every request ([`SpatialAccess`]). A query takes a
+//! snapshot of the world and, on a blocking thread, answers from the index when it is at
+//! (or past) the snapshot's revision. Otherwise the index is first brought up to the
+//! snapshot under the write lock: built whole the first time; afterwards synced with the
+//! bodies the change feed names since the index's revision, or, when the feed no longer
+//! covers that gap, by comparing every body. Answers carry the index's revision in the
+//! body and in `ETag`.
+//!
+//! Malformed requests (bad JSON or query strings, unknown fields) are answered 400;
+//! well-formed ones with values a query cannot take (NaN or infinite numbers, a negative
+//! radius, an empty box, a zero direction, a tolerance that is not a positive length)
+//! 422 `invalid-query`, naming the field as the request spells it; an answer that would
+//! hold more than `max_features` faces, edges and vertices 422 `too-many-features`.
+
+use std::sync::{Arc, RwLock, RwLockWriteGuard};
+use std::time::Instant;
+
+use axum::extract::rejection::{JsonRejection, QueryRejection};
+use axum::extract::{Query, State};
+use axum::http::StatusCode;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use tokio::sync::Semaphore;
+
+use super::{Answer, AppState, read_answer, snapshot};
+use crate::model::{BodyId, Serial, World};
+use crate::server::changes::{Action, Field, Kind};
+use crate::server::events::{Feed, Since};
+use crate::server::problem::Problem;
+use crate::spatial::{
+    BoxQuery, DEFAULT_MAX_FEATURES, DEFAULT_TOLERANCE, Detail, QueryError, Spatial, SphereQuery,
+};
+
+/// The largest `max_features` a request may ask for; larger values are taken as this.
+pub const MAX_FEATURES: usize = 1_000_000;
+
+/// The most changes read from the feed to bring the index up; a longer gap is closed by
+/// comparing every body instead.
+const FEED_GAP_MAX: u64 = 65_536;
+
+/// What spatial queries share: the index and the turns.
+pub struct SpatialAccess {
+    /// The index, built by the first query.
+    index: RwLock<Option<Spatial>>,
+    /// Queries allowed to run at once.
+    permits: Arc<Semaphore>,
+}
+
+impl Default for SpatialAccess {
+    fn default() -> Self {
+        SpatialAccess::new()
+    }
+}
+
+impl SpatialAccess {
+    /// No index yet (the first query builds it); as many queries at once as the machine
+    /// has cores.
+    pub fn new() -> SpatialAccess {
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        SpatialAccess {
+            index: RwLock::new(None),
+            permits: Arc::new(Semaphore::new(cores)),
+        }
+    }
+
+    /// Answers `ask` from an index at `world`'s revision or later, bringing the index up
+    /// first if it is behind. Blocking: call off the async threads.
+    fn answer<T>(&self, world: Arc<World>, feed: &Feed, ask: impl FnOnce(&Spatial) -> T) -> T {
+        let target = world.revision();
+        if let Ok(g) = self.index.read()
+            && let Some(s) = g.as_ref()
+            && s.revision() >= target
+        {
+            return ask(s);
+        }
+        let mut g = self.write();
+        // The snapshot the index leaves behind, freed once the lock is released: it may
+        // be the last reference to a world of many bodies.
+        let mut retired = None;
+        let index = match g.take() {
+            None => build(world),
+            Some(mut s) => {
+                if s.revision() < target {
+                    retired = Some(s.world().clone());
+                    bring_up(&mut s, world, feed);
+                }
+                s
+            }
+        };
+        // Answered under the write lock: the index cannot be dropped between the update
+        // and the question, and the readers queued behind it are released right after.
+        let answer = ask(g.insert(index));
+        drop(g);
+        drop(retired);
+        answer
+    }
+
+    /// `ask` of the index when it is at `revision` or past it and its read lock is free
+    /// now (never waits: a sync holding the write lock sends the question elsewhere).
+    fn try_current<T>(&self, revision: u64, ask: impl FnOnce(&Spatial) -> T) -> Option<T> {
+        let g = self.index.try_read().ok()?;
+        let s = g.as_ref().filter(|s| s.revision() >= revision)?;
+        Some(ask(s))
+    }
+
+    /// The write lock; a poisoned index (a panic while it was being changed) is dropped,
+    /// to be built anew.
+    fn write(&self) -> RwLockWriteGuard<'_, Option<Spatial>> {
+        match self.index.write() {
+            Ok(g) => g,
+            Err(poisoned) => {
+                let mut g = poisoned.into_inner();
+                *g = None;
+                self.index.clear_poison();
+                tracing::warn!("the spatial index was poisoned by a panic; it is built anew");
+                g
+            }
+        }
+    }
+}
+
+/// The index of `world`, logged.
+fn build(world: Arc<World>) -> Spatial {
+    let started = Instant::now();
+    let s = Spatial::build(world);
+    tracing::info!(
+        bodies = s.len(),
+        revision = s.revision(),
+        elapsed_ms = started.elapsed().as_secs_f64() * 1e3,
+        heap_mb = s.heap_bytes() as f64 / (1024.0 * 1024.0),
+        "spatial index built"
+    );
+    s
+}
+
+/// Brings `s` to `world`: with the bodies the feed names since `s`'s revision, or by
+/// comparing every body when the feed does not cover the gap.
+fn bring_up(s: &mut Spatial, world: Arc<World>, feed: &Feed) {
+    let (from, to) = (s.revision(), world.revision());
+    let started = Instant::now();
+    let touched = touched_between(feed, from, to);
+    let listed = touched.as_ref().map(Vec::len);
+    let stats = s.sync(world, touched.as_deref());
+    tracing::debug!(
+        from,
+        to,
+        listed,
+        shaped = stats.shaped,
+        moved = stats.moved,
+        added = stats.added,
+        removed = stats.removed,
+        rebuilt = stats.rebuilt,
+        elapsed_ms = started.elapsed().as_secs_f64() * 1e3,
+        "spatial index synced"
+    );
+}
+
+/// The bodies changed by the writes after revision `from` up to `to`, as the feed tells;
+/// `None` when the feed no longer holds every one of those writes (it was asked too late,
+/// or the gap is longer than [`FEED_GAP_MAX`]).
+///
+/// A body whose only changes are its list of sub-parts, its name or its colour is left
+/// out: its shape and pose are as they were, and each part added to or taken from it is
+/// named on its own. (Every creation updates its supart's parts; following those would
+/// revisit the whole world under the world body.)
+fn touched_between(feed: &Feed, from: u64, to: u64) -> Option<Vec<BodyId>> {
+    let gap = to.checked_sub(from)?;
+    if gap > FEED_GAP_MAX {
+        return None;
+    }
+    let limit = usize::try_from(gap).ok()?;
+    let Since::Changes { changes, .. } = feed.since(from, limit) else {
+        return None;
+    };
+    // The feed's changes are consecutive from `from + 1`: they cover the gap when the
+    // last one reaches `to` (with `more` or not: what follows is past the snapshot).
+    if changes.last().is_none_or(|c| c.revision < to) {
+        return None;
+    }
+    let mut ids: Vec<BodyId> = changes
+        .iter()
+        .filter(|c| c.revision <= to)
+        .flat_map(|c| c.changes.iter())
+        .filter(|e| e.kind == Kind::Body)
+        .filter(|e| {
+            !(e.action == Action::Updated
+                && !e.fields.is_empty()
+                && e.fields
+                    .iter()
+                    .all(|f| matches!(f, Field::Parts | Field::Name | Field::Color)))
+        })
+        .filter_map(|e| e.id)
+        .map(|id| BodyId(Serial(id)))
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
+    Some(ids)
+}
+
+// ----- requests ----------------------------------------------------------------------
+
+/// `POST /v1/spatial/sphere`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereReq {
+    /// The centre, world coordinates.
+    pub center: [f64; 3],
+    /// The radius, meters.
+    pub radius: f64,
+    /// How much of each body to answer (default `features`).
+    #[serde(default)]
+    pub detail: Option<Detail>,
+    /// The chord tolerance of portions, meters (default 1 mm).
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+    /// The most faces, edges and vertices in the answer.
+    #[serde(default)]
+    pub max_features: Option<usize>,
+}
+
+/// `GET /v1/spatial/sphere?x=&y=&z=&r=&detail=&tolerance=&max_features=`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereParams {
+    x: f64,
+    y: f64,
+    z: f64,
+    r: f64,
+    #[serde(default)]
+    detail: Option<Detail>,
+    #[serde(default)]
+    tolerance: Option<f64>,
+    #[serde(default)]
+    max_features: Option<usize>,
+}
+
+/// `POST /v1/spatial/box`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxReq {
+    /// The smallest corner, world coordinates.
+    pub min: [f64; 3],
+    /// The largest corner.
+    pub max: [f64; 3],
+    /// How much of each body to answer (default `features`).
+    #[serde(default)]
+    pub detail: Option<Detail>,
+    /// The most faces, edges and vertices in the answer.
+    #[serde(default)]
+    pub max_features: Option<usize>,
+}
+
+/// `GET /v1/spatial/box?min_x=&min_y=&min_z=&max_x=&max_y=&max_z=&detail=&max_features=`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxParams {
+    min_x: f64,
+    min_y: f64,
+    min_z: f64,
+    max_x: f64,
+    max_y: f64,
+    max_z: f64,
+    #[serde(default)]
+    detail: Option<Detail>,
+    #[serde(default)]
+    max_features: Option<usize>,
+}
+
+/// `POST /v1/spatial/nearest`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NearestReq {
+    /// The point, world coordinates.
+    pub point: [f64; 3],
+    /// The farthest a body may be, meters (default: no limit).
+    #[serde(default)]
+    pub max_distance: Option<f64>,
+}
+
+/// `GET /v1/spatial/nearest?x=&y=&z=&max_distance=`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NearestParams {
+    x: f64,
+    y: f64,
+    z: f64,
+    #[serde(default)]
+    max_distance: Option<f64>,
+}
+
+/// `POST /v1/spatial/ray`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RayReq {
+    /// Where the ray starts, world coordinates.
+    pub origin: [f64; 3],
+    /// Its direction (any length but zero).
+    pub direction: [f64; 3],
+    /// The farthest along the ray to look, meters (default: no limit).
+    #[serde(default)]
+    pub max_distance: Option<f64>,
+}
+
+/// `GET /v1/spatial/ray?x=&y=&z=&dx=&dy=&dz=&max_distance=`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RayParams {
+    x: f64,
+    y: f64,
+    z: f64,
+    dx: f64,
+    dy: f64,
+    dz: f64,
+    #[serde(default)]
+    max_distance: Option<f64>,
+}
+
+/// The names a request form gives its fields, for the problems that point at them.
+struct Names {
+    center: &'static str,
+    radius: &'static str,
+    min: [&'static str; 3],
+    max: [&'static str; 3],
+    direction: &'static str,
+    zero_direction: &'static str,
+}
+
+const JSON_NAMES: Names = Names {
+    center: "center",
+    radius: "radius",
+    min: ["min[0]", "min[1]", "min[2]"],
+    max: ["max[0]", "max[1]", "max[2]"],
+    direction: "direction",
+    zero_direction: "direction must not be [0, 0, 0]",
+};
+
+const QUERY_NAMES: Names = Names {
+    center: "x, y and z",
+    radius: "r",
+    min: ["min_x", "min_y", "min_z"],
+    max: ["max_x", "max_y", "max_z"],
+    direction: "dx, dy and dz",
+    zero_direction: "dx, dy and dz must not all be zero",
+};
+
+/// 422 `invalid-query`.
+fn invalid(detail: impl Into<String>) -> Problem {
+    Problem::new(
+        StatusCode::UNPROCESSABLE_ENTITY,
+        "invalid-query",
+        "Invalid spatial query",
+        detail,
+    )
+}
+
+/// The problem answering a query the index refused.
+fn refused(e: QueryError) -> Problem {
+    match e {
+        QueryError::TooManyFeatures { .. } | QueryError::TooManyBodies { .. } => Problem::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "too-many-features",
+            "Too many features",
+            e.to_string(),
+        ),
+        QueryError::NotFinite { .. }
+        | QueryError::NegativeRadius(_)
+        | QueryError::EmptyBox
+        | QueryError::ZeroDirection
+        | QueryError::BadTolerance(_)
+        | QueryError::NegativeDistance(_) => invalid(e.to_string()),
+    }
+}
+
+fn point(v: [f64; 3], name: &str) -> Result<DVec3, Problem> {
+    let p = DVec3::from_array(v);
+    if p.is_finite() {
+        Ok(p)
+    } else {
+        Err(invalid(format!(
+            "{name} must be finite (got [{}, {}, {}])",
+            v[0], v[1], v[2]
+        )))
+    }
+}
+
+fn max_distance(d: Option<f64>) -> Result<f64, Problem> {
+    match d {
+        None => Ok(f64::INFINITY),
+        Some(d) if d.is_nan() || d < 0.0 => Err(invalid(format!(
+            "max_distance must be zero or more meters (got {d}); leave it out for no limit"
+        ))),
+        Some(d) => Ok(d),
+    }
+}
+
+fn max_features(n: Option<usize>) -> usize {
+    n.unwrap_or(DEFAULT_MAX_FEATURES).min(MAX_FEATURES)
+}
+
+/// Checks a sphere query, naming fields as `names` does.
+#[allow(clippy::too_many_arguments)]
+fn sphere_query(
+    center: [f64; 3],
+    radius: f64,
+    detail: Option<Detail>,
+    tolerance: Option<f64>,
+    features: Option<usize>,
+    names: &Names,
+) -> Result<SphereQuery, Problem> {
+    let center = point(center, names.center)?;
+    if !radius.is_finite() || radius < 0.0 {
+        return Err(invalid(format!(
+            "{} must be a finite number of meters, zero or more (got {radius})",
+            names.radius
+        )));
+    }
+    let tolerance = tolerance.unwrap_or(DEFAULT_TOLERANCE);
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(invalid(format!(
+            "tolerance must be a finite number of meters above zero (got {tolerance})"
+        )));
+    }
+    Ok(SphereQuery {
+        center,
+        radius,
+        detail: detail.unwrap_or_default(),
+        tolerance,
+        max_features: max_features(features),
+        max_bodies: usize::MAX,
+    })
+}
+
+/// Checks a box query, naming fields as `names` does.
+fn box_query(
+    min: [f64; 3],
+    max: [f64; 3],
+    detail: Option<Detail>,
+    features: Option<usize>,
+    names: &Names,
+) -> Result<BoxQuery, Problem> {
+    for (v, n) in min.iter().zip(names.min).chain(max.iter().zip(names.max)) {
+        if !v.is_finite() {
+            return Err(invalid(format!("{n} must be a finite number (got {v})")));
+        }
+    }
+    for k in 0..3 {
+        if min[k] > max[k] {
+            return Err(invalid(format!(
+                "the box is empty: {} ({}) exceeds {} ({})",
+                names.min[k], min[k], names.max[k], max[k]
+            )));
+        }
+    }
+    Ok(BoxQuery {
+        min: DVec3::from_array(min),
+        max: DVec3::from_array(max),
+        detail: detail.unwrap_or_default(),
+        max_features: max_features(features),
+        max_bodies: usize::MAX,
+    })
+}
+
+/// A ray's direction scaled so that its largest component is ±1 (so that its length
+/// cannot overflow), checked.
+fn direction(v: [f64; 3], names: &Names) -> Result<DVec3, Problem> {
+    let d = point(v, names.direction)?;
+    let m = d.abs().max_element();
+    if m == 0.0 {
+        return Err(invalid(format!(
+            "{}: a ray needs a direction",
+            names.zero_direction
+        )));
+    }
+    Ok(d / m)
+}
+
+// ----- handlers ----------------------------------------------------------------------
+
+fn json<T>(req: Result<axum::Json<T>, JsonRejection>) -> Result<T, Problem> {
+    req.map(|axum::Json(v)| v).map_err(Problem::from)
+}
+
+fn query<T>(req: Result<Query<T>, QueryRejection>) -> Result<T, Problem> {
+    req.map(|Query(v)| v).map_err(Problem::from)
+}
+
+/// `POST /v1/spatial/sphere`.
+pub(super) async fn sphere_post(
+    State(state): State<AppState>,
+    req: Result<axum::Json<SphereReq>, JsonRejection>,
+) -> Answer {
+    let r = json(req)?;
+    let q = sphere_query(
+        r.center,
+        r.radius,
+        r.detail,
+        r.tolerance,
+        r.max_features,
+        &JSON_NAMES,
+    )?;
+    run(&state, move |s, inline| s.sphere(&inline_sphere(q, inline))).await
+}
+
+/// `GET /v1/spatial/sphere`.
+pub(super) async fn sphere_get(
+    State(state): State<AppState>,
+    req: Result<Query<SphereParams>, QueryRejection>,
+) -> Answer {
+    let r = query(req)?;
+    let q = sphere_query(
+        [r.x, r.y, r.z],
+        r.r,
+        r.detail,
+        r.tolerance,
+        r.max_features,
+        &QUERY_NAMES,
+    )?;
+    run(&state, move |s, inline| s.sphere(&inline_sphere(q, inline))).await
+}
+
+/// `POST /v1/spatial/box`.
+pub(super) async fn box_post(
+    State(state): State<AppState>,
+    req: Result<axum::Json<BoxReq>, JsonRejection>,
+) -> Answer {
+    let r = json(req)?;
+    let q = box_query(r.min, r.max, r.detail, r.max_features, &JSON_NAMES)?;
+    run(&state, move |s, inline| s.aabb(&inline_box(q, inline))).await
+}
+
+/// `GET /v1/spatial/box`.
+pub(super) async fn box_get(
+    State(state): State<AppState>,
+    req: Result<Query<BoxParams>, QueryRejection>,
+) -> Answer {
+    let r = query(req)?;
+    let q = box_query(
+        [r.min_x, r.min_y, r.min_z],
+        [r.max_x, r.max_y, r.max_z],
+        r.detail,
+        r.max_features,
+        &QUERY_NAMES,
+    )?;
+    run(&state, move |s, inline| s.aabb(&inline_box(q, inline))).await
+}
+
+/// `POST /v1/spatial/nearest`.
+pub(super) async fn nearest_post(
+    State(state): State<AppState>,
+    req: Result<axum::Json<NearestReq>, JsonRejection>,
+) -> Answer {
+    let r = json(req)?;
+    let p = point(r.point, "point")?;
+    let d = max_distance(r.max_distance)?;
+    run(&state, move |s, _| s.nearest(p, d)).await
+}
+
+/// `GET /v1/spatial/nearest`.
+pub(super) async fn nearest_get(
+    State(state): State<AppState>,
+    req: Result<Query<NearestParams>, QueryRejection>,
+) -> Answer {
+    let r = query(req)?;
+    let p = point([r.x, r.y, r.z], QUERY_NAMES.center)?;
+    let d = max_distance(r.max_distance)?;
+    run(&state, move |s, _| s.nearest(p, d)).await
+}
+
+/// `POST /v1/spatial/ray`.
+pub(super) async fn ray_post(
+    State(state): State<AppState>,
+    req: Result<axum::Json<RayReq>, JsonRejection>,
+) -> Answer {
+    let r = json(req)?;
+    let o = point(r.origin, "origin")?;
+    let d = direction(r.direction, &JSON_NAMES)?;
+    let m = max_distance(r.max_distance)?;
+    run(&state, move |s, _| s.ray(o, d, m)).await
+}
+
+/// `GET /v1/spatial/ray`.
+pub(super) async fn ray_get(
+    State(state): State<AppState>,
+    req: Result<Query<RayParams>, QueryRejection>,
+) -> Answer {
+    let r = query(req)?;
+    let o = point([r.x, r.y, r.z], QUERY_NAMES.center)?;
+    let d = direction([r.dx, r.dy, r.dz], &QUERY_NAMES)?;
+    let m = max_distance(r.max_distance)?;
+    run(&state, move |s, _| s.ray(o, d, m)).await
+}
+
+/// An answer that says which revision it describes.
+trait Revised {
+    fn revision(&self) -> u64;
+}
+
+impl Revised for crate::spatial::SphereAnswer {
+    fn revision(&self) -> u64 {
+        self.revision
+    }
+}
+
+impl Revised for crate::spatial::BoxAnswer {
+    fn revision(&self) -> u64 {
+        self.revision
+    }
+}
+
+impl<T> Revised for crate::spatial::Found<T> {
+    fn revision(&self) -> u64 {
+        self.revision
+    }
+}
+
+/// The most faces, edges and vertices of an answer computed on the async threads.
+const INLINE_FEATURES: usize = 2_000;
+/// The most bodies of an answer computed on the async threads.
+const INLINE_BODIES: usize = 256;
+
+/// `q`, held to the budget of the async threads when `inline`.
+fn inline_sphere(mut q: SphereQuery, inline: bool) -> SphereQuery {
+    if inline {
+        q.max_features = q.max_features.min(INLINE_FEATURES);
+        q.max_bodies = q.max_bodies.min(INLINE_BODIES);
+    }
+    q
+}
+
+/// `q`, held to the budget of the async threads when `inline`.
+fn inline_box(mut q: BoxQuery, inline: bool) -> BoxQuery {
+    if inline {
+        q.max_features = q.max_features.min(INLINE_FEATURES);
+        q.max_bodies = q.max_bodies.min(INLINE_BODIES);
+    }
+    q
+}
+
+/// Takes a snapshot and asks the index. A question the current index can answer within
+/// the small budget ([`INLINE_FEATURES`], [`INLINE_BODIES`]) is answered at once, on the
+/// async thread (a few microseconds, less than handing it to another thread); a larger
+/// one, or one that needs the index brought up first, takes a turn and runs on a
+/// blocking thread. `ask(index, inline)` must honour the budget when `inline`. Answers
+/// carry the index's revision in `ETag`.
+async fn run<T>(
+    state: &AppState,
+    ask: impl Fn(&Spatial, bool) -> Result<T, QueryError> + Send + 'static,
+) -> Answer
+where
+    T: Serialize + Revised + Send + 'static,
+{
+    let world = snapshot(&state.handle).await?;
+    let access = state.spatial.clone();
+    if let Some(answer) = access.try_current(world.revision(), |s| ask(s, true)) {
+        match answer {
+            Ok(a) => return Ok(read_answer(a.revision(), a)),
+            // Over the small budget: asked again below with the request's own limits.
+            Err(QueryError::TooManyFeatures { .. } | QueryError::TooManyBodies { .. }) => {}
+            Err(e) => return Err(refused(e)),
+        }
+    }
+    let _turn = access
+        .permits
+        .clone()
+        .acquire_owned()
+        .await
+        .map_err(|_| Problem::unavailable())?;
+    let feed = state.feed.clone();
+    let answer =
+        tokio::task::spawn_blocking(move || access.answer(world, &feed, |s| ask(s, false)))
+            .await
+            .map_err(Problem::internal)?
+            .map_err(refused)?;
+    Ok(read_answer(answer.revision(), answer))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::server::changes::{Change, EntityChange};
+
+    fn body(action: Action, id: u64, fields: &[Field]) -> EntityChange {
+        EntityChange {
+            action,
+            kind: Kind::Body,
+            id: Some(id),
+            name: None,
+            fields: fields.to_vec(),
+        }
+    }
+
+    fn change(revision: u64, changes: Vec<EntityChange>) -> Change {
+        Change {
+            revision,
+            edit: "test".into(),
+            changes,
+        }
+    }
+
+    #[test]
+    fn the_feed_names_the_bodies_that_moved_or_changed_shape() {
+        let feed = Feed::new(
+            10,
+            5,
+            vec![
+                change(3, vec![body(Action::Added, 7, &[])]),
+                change(
+                    4,
+                    vec![
+                        body(Action::Added, 8, &[]),
+                        body(Action::Updated, 1, &[Field::Parts]),
+                    ],
+                ),
+                change(
+                    5,
+                    vec![
+                        body(Action::Updated, 7, &[Field::Pose]),
+                        body(Action::Updated, 8, &[Field::Name, Field::Color]),
+                        body(Action::Removed, 9, &[]),
+                    ],
+                ),
+            ],
+        );
+        let ids = |v: Option<Vec<BodyId>>| v.map(|v| v.iter().map(|b| b.get()).collect::<Vec<_>>());
+        assert_eq!(ids(touched_between(&feed, 2, 5)), Some(vec![7, 8, 9]));
+        assert_eq!(ids(touched_between(&feed, 4, 5)), Some(vec![7, 9]));
+        // Older than the history: the feed cannot tell.
+        assert_eq!(ids(touched_between(&feed, 1, 5)), None);
+        // Only up to the snapshot's revision.
+        assert_eq!(ids(touched_between(&feed, 2, 3)), Some(vec![7]));
+        // A snapshot ahead of the feed: not covered.
+        assert_eq!(ids(touched_between(&feed, 4, 6)), None);
+    }
+
+    #[test]
+    fn query_string_numbers_are_checked_by_name() {
+        let p = sphere_query([f64::NAN, 0.0, 0.0], 1.0, None, None, None, &QUERY_NAMES)
+            .expect_err("NaN refused");
+        assert_eq!(p.status, StatusCode::UNPROCESSABLE_ENTITY);
+        assert!(p.detail.contains("x, y and z"), "{}", p.detail);
+        let p = sphere_query([0.0; 3], -1.0, None, None, None, &JSON_NAMES).expect_err("radius");
+        assert!(p.detail.starts_with("radius"), "{}", p.detail);
+        let p = sphere_query([0.0; 3], 1.0, None, Some(0.0), None, &JSON_NAMES).expect_err("tol");
+        assert!(p.detail.starts_with("tolerance"), "{}", p.detail);
+        let p = box_query([0.0, 2.0, 0.0], [1.0; 3], None, None, &QUERY_NAMES).expect_err("empty");
+        assert!(
+            p.detail.contains("min_y (2) exceeds max_y (1)"),
+            "{}",
+            p.detail
+        );
+        let p = direction([0.0; 3], &QUERY_NAMES).expect_err("zero");
+        assert!(p.detail.starts_with("dx, dy and dz"), "{}", p.detail);
+        assert_eq!(
+            direction([1e308, 1e308, 0.0], &JSON_NAMES).ok(),
+            Some(DVec3::new(1.0, 1.0, 0.0))
+        );
+        assert!(max_distance(Some(f64::NAN)).is_err());
+        assert!(max_distance(Some(-1.0)).is_err());
+        assert_eq!(max_features(Some(usize::MAX)), MAX_FEATURES);
+        assert_eq!(
+            refused(QueryError::TooManyFeatures { limit: 3 }).kind,
+            "too-many-features"
+        );
+    }
+}
