@@ -186,7 +186,7 @@ pub fn validate_ray(
     finite(direction, "the direction's coordinates")?;
     validate_point(origin, max_distance)?;
     let len = direction.length();
-    if !(len > 0.0) || !len.is_finite() {
+    if len <= 0.0 || !len.is_finite() {
         return Err(QueryError::ZeroDirection);
     }
     Ok(direction / len)

@@ -265,7 +265,7 @@ impl BodyShape {
             return None;
         }
         let t = (f.offset - f.normal.dot(o)) / denom;
-        if !(t >= 0.0) {
+        if t.is_nan() || t < 0.0 {
             return None;
         }
         let h = o + d * t;
@@ -341,7 +341,9 @@ impl BodyShape {
 }
 
 /// Directions tried in turn by [`BodyShape::contains`]: skew to every axis and every
-/// diagonal, so that axis-aligned models rarely graze an edge.
+/// diagonal, so that axis-aligned models rarely graze an edge. Their components borrow
+/// the digits of familiar constants only to be arbitrary.
+#[allow(clippy::approx_constant)]
 const PROBES: [[f64; 3]; 6] = [
     [0.577_215_664_9, 0.301_029_995_6, 0.759_134_123_1],
     [-0.414_213_562_3, 0.865_255_979_4, 0.281_718_171_5],

@@ -4,6 +4,7 @@
 //! ```text
 //! bash bench/spatial/run.sh            # both data sets, then a table
 //! bash bench/spatial/run.sh terrain    # one data set (terrain or city)
+//! target/release/spatial-peers profile city 15 bodies   # winged alone, for perf
 //! ```
 //!
 //! Data (`bench/spatial/data.rs`): a closed terrain solid of 1,000,000 triangles and a
@@ -500,8 +501,64 @@ fn centers_for_check() -> Vec<DVec3> {
     data::city_centers(CHECKED, 2)
 }
 
+/// `profile <terrain|city> <hits> <bodies|features> [seconds]`: winged's sphere queries
+/// alone in a loop (about `hits` hits each), for `perf record`.
+fn profile(args: &[String]) {
+    let set = args.first().map_or("city", String::as_str);
+    let target: f64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(15.0);
+    let detail = match args.get(2).map(String::as_str) {
+        Some("bodies") => Detail::Bodies,
+        _ => Detail::Features,
+    };
+    let seconds: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(10.0);
+    let (world, centers, count): (World, Vec<DVec3>, fn(&Spatial, DVec3, f64) -> usize) =
+        if set == "terrain" {
+            let t = Terrain::new();
+            let centers = t.centers(QUERIES, 1);
+            (t.world().0, centers, |s, c, r| {
+                let q = SphereQuery::new(c, r).with_detail(Detail::Features);
+                let a = s.sphere(&q).expect("a valid query");
+                a.bodies
+                    .iter()
+                    .map(|b| b.faces.as_ref().map_or(0, Vec::len))
+                    .sum()
+            })
+        } else {
+            let city = data::city();
+            (
+                data::city_world(&city).0,
+                data::city_centers(QUERIES, 2),
+                |s, c, r| {
+                    let q = SphereQuery::new(c, r).with_detail(Detail::Bodies);
+                    s.sphere(&q).expect("a valid query").bodies.len()
+                },
+            )
+        };
+    let spatial = Spatial::build(Arc::new(world));
+    let r = data::calibrate(target, &centers[..CALIBRATION], 0.01, 400.0, |c, r| {
+        count(&spatial, c, r)
+    });
+    println!("{set}: radius {r:.3} for about {target} hits; querying for {seconds} s");
+    let start = Instant::now();
+    let mut n = 0usize;
+    while start.elapsed().as_secs_f64() < seconds {
+        for &c in &centers {
+            let q = SphereQuery::new(c, r).with_detail(detail);
+            std::hint::black_box(spatial.sphere(&q).expect("a valid query"));
+        }
+        n += centers.len();
+    }
+    let us = start.elapsed().as_secs_f64() * 1e6 / n as f64;
+    println!("{n} queries, {us:.2} µs each");
+}
+
 fn main() {
-    let which = std::env::args().nth(1).unwrap_or_default();
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("profile") {
+        profile(&args[1..]);
+        return;
+    }
+    let which = args.first().cloned().unwrap_or_default();
     println!(
         "{} cores; load average at start {}; rayon threads {}",
         std::thread::available_parallelism().map_or(0, |n| n.get()),
