@@ -92,6 +92,7 @@ const QUERIES: usize = 10_000;
 const CALIBRATION: usize = 300;
 const CHECKED: usize = 500;
 const MOVES: usize = 300;
+const WARM: usize = 10_000;
 
 /// Builds three times: the median time in seconds, the last structure, and the bytes
 /// it holds (live bytes after the last build minus before it).
@@ -452,44 +453,87 @@ fn city(table: &mut Table) {
             )
         })
         .collect();
-    let mut moved = city.clone();
+    // Each move: the world written (cloned, the body posed) outside the timing, then
+    // each index told, in turn (the order rotates, so that none always runs first after
+    // the write has filled the caches with the new snapshot).
     let mut current: Arc<World> = world.clone();
-    let mut wns = Vec::new();
-    for &(k, shift) in &moves {
-        let b = &mut moved[k];
-        b.center += shift;
-        let pose = Pose::new(b.center, b.pose().rotation).expect("a pose");
-        let next = data::moved(&current, ids[k], pose);
-        let t = Instant::now();
-        let stats = spatial.sync(next.clone(), Some(&[ids[k]]));
-        wns.push(t.elapsed().as_nanos() as f64);
-        assert_eq!(stats.moved, 1);
-        current = next;
-    }
-    let mut rns = Vec::new();
-    let mut pns = Vec::new();
-    for &(k, shift) in &moves {
+    let (mut wns, mut rns, mut pns) = (Vec::new(), Vec::new(), Vec::new());
+    for (i, &(k, shift)) in moves.iter().enumerate() {
         let (lo, hi) = city[k].bounds();
         city[k].center += shift;
         let (nlo, nhi) = city[k].bounds();
+        let pose = Pose::new(city[k].center, city[k].pose().rotation).expect("a pose");
+        let next = data::moved(&current, ids[k], pose);
         let old = rstar_item(lo, hi, k as u32);
         let new = rstar_item(nlo, nhi, k as u32);
-        let t = Instant::now();
-        let gone = rtree.remove(&old);
-        rtree.insert(new);
-        rns.push(t.elapsed().as_nanos() as f64);
-        assert!(gone.is_some());
         let b = parry_box(nlo, nhi);
-        let t = Instant::now();
-        bvh.insert(b, k as u32);
-        pns.push(t.elapsed().as_nanos() as f64);
+        for engine in (0..3).map(|e| (e + i) % 3) {
+            match engine {
+                0 => {
+                    let t = Instant::now();
+                    let stats = spatial.sync(next.clone(), Some(&[ids[k]]));
+                    wns.push(t.elapsed().as_nanos() as f64);
+                    assert_eq!(stats.moved, 1);
+                }
+                1 => {
+                    let t = Instant::now();
+                    let gone = rtree.remove(&old);
+                    rtree.insert(new);
+                    rns.push(t.elapsed().as_nanos() as f64);
+                    assert!(gone.is_some());
+                }
+                _ => {
+                    let t = Instant::now();
+                    bvh.insert(b, k as u32);
+                    pns.push(t.elapsed().as_nanos() as f64);
+                }
+            }
+        }
+        current = next;
     }
     table.timings(
         set,
-        &format!("move one body ({MOVES} distinct bodies)"),
+        &format!("move one body: {MOVES} distinct bodies, each after a world write"),
         Timings::of(&mut wns),
         Timings::of(&mut rns),
         Timings::of(&mut pns),
+    );
+
+    // Warm: one body moved back and forth between two places, WARM times (an even
+    // number, so it ends where it began); the mean per move.
+    let k = ids.len() / 2 + data::CITY_NX / 2;
+    let a = current.clone();
+    let (lo, hi) = city[k].bounds();
+    let mut there = city[k];
+    there.center += DVec3::new(4.0, 3.0, 0.0);
+    let (nlo, nhi) = there.bounds();
+    let b = data::moved(&a, ids[k], there.pose());
+    let t = Instant::now();
+    for i in 0..WARM {
+        let w = if i % 2 == 0 { b.clone() } else { a.clone() };
+        std::hint::black_box(spatial.sync(w, Some(&[ids[k]])));
+    }
+    let w = t.elapsed().as_nanos() as f64 / WARM as f64 / 1e3;
+    let items = [rstar_item(lo, hi, k as u32), rstar_item(nlo, nhi, k as u32)];
+    let t = Instant::now();
+    for i in 0..WARM {
+        assert!(rtree.remove(&items[i % 2]).is_some());
+        rtree.insert(items[(i + 1) % 2]);
+    }
+    let r = t.elapsed().as_nanos() as f64 / WARM as f64 / 1e3;
+    let boxes = [parry_box(nlo, nhi), parry_box(lo, hi)];
+    let t = Instant::now();
+    for i in 0..WARM {
+        bvh.insert(boxes[i % 2], k as u32);
+    }
+    let p = t.elapsed().as_nanos() as f64 / WARM as f64 / 1e3;
+    let f = |x: f64| format!("{x:.2}");
+    table.row(
+        set,
+        &format!("move one body: the same body back and forth, mean of {WARM}"),
+        f(w),
+        f(r),
+        f(p),
     );
     for &r in &radii {
         check(&spatial, &rtree, &bvh, &city, r);
@@ -535,10 +579,49 @@ fn profile(args: &[String]) {
             )
         };
     let spatial = Spatial::build(Arc::new(world));
-    let r = data::calibrate(target, &centers[..CALIBRATION], 0.01, 400.0, |c, r| {
+    let hi = if set == "terrain" { 20.0 } else { 400.0 };
+    let r = data::calibrate(target, &centers[..CALIBRATION], 0.01, hi, |c, r| {
         count(&spatial, c, r)
     });
     println!("{set}: radius {r:.3} for about {target} hits; querying for {seconds} s");
+    if set == "terrain" {
+        // How many faces the body's hierarchy leaves for the exact test.
+        let (_, body) = spatial
+            .world()
+            .bodies()
+            .find(|(_, n)| n.body.face_count() > 0)
+            .expect("the terrain");
+        let shape = winged::spatial::shape::BodyShape::build(body.body.clone());
+        let sample = &centers[..CALIBRATION];
+        let mut visited = 0usize;
+        for &c in sample {
+            shape.bvh.within(c, r * r, |_| visited += 1);
+        }
+        println!(
+            "{:.1} faces per query in the leaves the hierarchy visits",
+            visited as f64 / sample.len() as f64
+        );
+    } else {
+        // How many bodies the top hierarchy leaves for the exact test: those whose world
+        // bounds lie within the radius.
+        let city = data::city();
+        let sample = &centers[..CALIBRATION];
+        let within: usize = sample
+            .iter()
+            .map(|&c| {
+                city.iter()
+                    .filter(|b| {
+                        let (lo, hi) = b.bounds();
+                        (lo - c).max(c - hi).max(DVec3::ZERO).length_squared() <= r * r
+                    })
+                    .count()
+            })
+            .sum();
+        println!(
+            "{:.1} bodies per query have bounds within the radius",
+            within as f64 / sample.len() as f64
+        );
+    }
     let start = Instant::now();
     let mut n = 0usize;
     while start.elapsed().as_secs_f64() < seconds {
