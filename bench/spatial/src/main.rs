@@ -1,0 +1,660 @@
+//! Spatial access side by side, in one process on the same data: winged's `Spatial`,
+//! rstar's `RTree` (bulk-loaded rectangles) and parry3d's `Bvh` (axis-aligned boxes).
+//!
+//! ```text
+//! bash bench/spatial/run.sh            # both data sets, then a table
+//! bash bench/spatial/run.sh terrain    # one data set (terrain or city)
+//! target/release/spatial-peers profile city 15 bodies   # winged alone, for perf
+//! ```
+//!
+//! Data (`bench/spatial/data.rs`): a closed terrain solid of 1,000,000 triangles and a
+//! city of 100,000 boxes. For each: build time (median of 3), bytes held (a counting
+//! allocator: live bytes after the build minus before, build temporaries freed), sphere
+//! queries at radii calibrated for about 15 and about 120 hits (p50 / p99 / mean of
+//! 10,000 queries each timed alone), and for the city the cost of moving one body (300
+//! distinct bodies, one after the other, the same moves for every index).
+//!
+//! rstar and parry3d answer the candidates their tree finds for the ball's bounding box
+//! and keep those that pass an exact test: for triangles [`data::ball_meets_triangle`]
+//! (the test winged runs on each face, from the same functions), for boxes
+//! [`data::Building::meets_ball`]. Before timing, every index's hits are checked equal on
+//! 500 queries of each size (and again for the city after the moves).
+
+#[path = "../data.rs"]
+mod data;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use data::{Building, Terrain, Timings, ball_box, ball_meets_triangle};
+use glam::DVec3;
+use parry3d::bounding_volume::Aabb as PAabb;
+use parry3d::math::Vector as PVec;
+use parry3d::partitioning::{Bvh, BvhBuildStrategy};
+use rstar::primitives::{GeomWithData, Rectangle};
+use rstar::{AABB, RTree};
+use winged::model::{Pose, World};
+use winged::spatial::{Detail, Spatial, SphereQuery};
+
+// ------------------------------------------------------------------ counting allocator
+
+/// The system allocator, counting the bytes live.
+struct Counting;
+
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: every call is forwarded to the system allocator unchanged; only a counter is
+// kept beside it.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        LIVE.fetch_add(layout.size(), Ordering::Relaxed);
+        // SAFETY: forwarded with the caller's layout.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        LIVE.fetch_add(layout.size(), Ordering::Relaxed);
+        // SAFETY: forwarded with the caller's layout.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+        // SAFETY: `ptr` came from this allocator (hence the system's) with `layout`.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: forwarded with the caller's arguments.
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            LIVE.fetch_add(new_size, Ordering::Relaxed);
+            LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+        }
+        p
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+fn live() -> usize {
+    LIVE.load(Ordering::Relaxed)
+}
+
+// ----------------------------------------------------------------------------- helpers
+
+const QUERIES: usize = 10_000;
+const CALIBRATION: usize = 300;
+const CHECKED: usize = 500;
+const MOVES: usize = 300;
+const WARM: usize = 10_000;
+
+/// Builds three times: the median time in seconds, the last structure, and the bytes
+/// it holds (live bytes after the last build minus before it).
+fn build<T>(mut f: impl FnMut() -> T) -> (T, f64, usize) {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..3 {
+        drop(last.take());
+        let before = live();
+        let t = Instant::now();
+        let x = f();
+        times.push(t.elapsed().as_secs_f64());
+        let bytes = live().saturating_sub(before);
+        last = Some((x, bytes));
+    }
+    times.sort_by(f64::total_cmp);
+    let (x, bytes) = last.expect("built");
+    (x, times[1], bytes)
+}
+
+/// An `f32` box holding the `f64` box `lo..=hi` (each bound rounded outward).
+fn parry_box(lo: DVec3, hi: DVec3) -> PAabb {
+    let down = |x: f64| {
+        let y = x as f32;
+        if f64::from(y) > x { y.next_down() } else { y }
+    };
+    let up = |x: f64| {
+        let y = x as f32;
+        if f64::from(y) < x { y.next_up() } else { y }
+    };
+    PAabb::new(
+        PVec::new(down(lo.x), down(lo.y), down(lo.z)),
+        PVec::new(up(hi.x), up(hi.y), up(hi.z)),
+    )
+}
+
+type Item = GeomWithData<Rectangle<[f64; 3]>, u32>;
+
+fn rstar_item(lo: DVec3, hi: DVec3, i: u32) -> Item {
+    GeomWithData::new(Rectangle::from_corners(lo.to_array(), hi.to_array()), i)
+}
+
+fn rstar_ball(c: DVec3, r: f64) -> AABB<[f64; 3]> {
+    let (lo, hi) = ball_box(c, r);
+    AABB::from_corners(lo.to_array(), hi.to_array())
+}
+
+fn sorted(mut v: Vec<u32>) -> Vec<u32> {
+    v.sort_unstable();
+    v
+}
+
+fn mb(bytes: usize) -> String {
+    format!("{:.1} MB", bytes as f64 / 1e6)
+}
+
+/// The table printed at the end: rows of (data set, measure, winged, rstar, parry3d).
+#[derive(Default)]
+struct Table {
+    rows: Vec<[String; 5]>,
+}
+
+impl Table {
+    fn row(&mut self, set: &str, what: &str, w: String, r: String, p: String) {
+        println!("{set} | {what} | winged {w} | rstar {r} | parry3d {p}");
+        self.rows.push([set.into(), what.into(), w, r, p]);
+    }
+
+    fn timings(&mut self, set: &str, what: &str, w: Timings, r: Timings, p: Timings) {
+        let f = |t: Timings| format!("{:.2} / {:.2} ({:.2})", t.p50, t.p99, t.mean);
+        self.row(set, what, f(w), f(r), f(p));
+    }
+
+    fn print(&self) {
+        let mut s = String::new();
+        s.push_str("| data | measure | winged | rstar 0.14 | parry3d 0.31 |\n");
+        s.push_str("|---|---|---|---|---|\n");
+        for r in &self.rows {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} |",
+                r[0], r[1], r[2], r[3], r[4]
+            );
+        }
+        println!("\n{s}");
+        println!("Query rows: p50 / p99 (mean) in µs per query; move rows likewise per move.");
+    }
+}
+
+fn loadavg() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_default()
+}
+
+// ----------------------------------------------------------------------------- terrain
+
+fn terrain(table: &mut Table) {
+    let set = "terrain, 1M triangles";
+    let terrain = Terrain::new();
+    let n = terrain.triangles.len() as u32;
+    let (world, _, first) = terrain.world();
+    let world = Arc::new(world);
+
+    let (spatial, tw, bw) = build(|| Spatial::build(world.clone()));
+    let (rtree, tr, br) = build(|| {
+        RTree::bulk_load(
+            (0..n)
+                .map(|i| {
+                    let [a, b, c] = terrain.corners(i);
+                    rstar_item(a.min(b).min(c), a.max(b).max(c), i)
+                })
+                .collect(),
+        )
+    });
+    let (bvh, tp, bp) = build(|| {
+        Bvh::from_iter(
+            BvhBuildStrategy::Binned,
+            (0..n).map(|i| {
+                let [a, b, c] = terrain.corners(i);
+                (i as usize, parry_box(a.min(b).min(c), a.max(b).max(c)))
+            }),
+        )
+    });
+    let ms = |t: f64| format!("{:.0} ms", t * 1e3);
+    table.row(set, "build", ms(tw), ms(tr), ms(tp));
+    let mesh = terrain.mesh_bytes();
+    table.row(
+        set,
+        "bytes held by the index",
+        format!("{} (heap_bytes {})", mb(bw), mb(spatial.heap_bytes())),
+        format!("{} (+ {} triangle data)", mb(br), mb(mesh)),
+        format!(
+            "{} (heap_memory_size {}; + {} triangle data)",
+            mb(bp),
+            mb(bvh.heap_memory_size()),
+            mb(mesh)
+        ),
+    );
+
+    let winged_q = |c: DVec3, r: f64| -> Vec<u32> {
+        let q = SphereQuery::new(c, r).with_detail(Detail::Features);
+        let a = spatial.sphere(&q).expect("a valid query");
+        a.bodies
+            .iter()
+            .flat_map(|b| b.faces.iter().flatten())
+            .map(|f| (f.id - first) as u32)
+            .collect()
+    };
+    let rstar_q = |c: DVec3, r: f64| -> Vec<u32> {
+        let mut out = Vec::new();
+        for t in rtree.locate_in_envelope_intersecting(rstar_ball(c, r)) {
+            if ball_meets_triangle(&terrain.corners(t.data), c, r) {
+                out.push(t.data);
+            }
+        }
+        out
+    };
+    let parry_q = |c: DVec3, r: f64| -> Vec<u32> {
+        let (lo, hi) = ball_box(c, r);
+        let b = parry_box(lo, hi);
+        let mut out = Vec::new();
+        for i in bvh.intersect_aabb(&b) {
+            if ball_meets_triangle(&terrain.corners(i), c, r) {
+                out.push(i);
+            }
+        }
+        out
+    };
+
+    let centers = terrain.centers(QUERIES, 1);
+    for target in [15.0, 120.0] {
+        let r = data::calibrate(target, &centers[..CALIBRATION], 0.01, 20.0, |c, r| {
+            rstar_q(c, r).len()
+        });
+        for &c in &centers[..CHECKED] {
+            let w = sorted(winged_q(c, r));
+            assert!(w.iter().all(|&i| i < n), "a wall met at {c}");
+            assert_eq!(
+                w,
+                sorted(rstar_q(c, r)),
+                "winged and rstar differ at {c}, r {r}"
+            );
+            assert_eq!(
+                w,
+                sorted(parry_q(c, r)),
+                "winged and parry3d differ at {c}, r {r}"
+            );
+        }
+        let (w, hw) = data::time_each(&centers, |c| winged_q(c, r).len());
+        let (rr, hr) = data::time_each(&centers, |c| rstar_q(c, r).len());
+        let (p, hp) = data::time_each(&centers, |c| parry_q(c, r).len());
+        assert_eq!(hw, hr);
+        assert_eq!(hw, hp);
+        table.timings(
+            set,
+            &format!("sphere, features, radius {r:.3} m, mean {hw:.1} faces"),
+            w,
+            rr,
+            p,
+        );
+    }
+}
+
+// -------------------------------------------------------------------------------- city
+
+fn city(table: &mut Table) {
+    let set = "city, 100k boxes";
+    let mut city = data::city();
+    let n = city.len() as u32;
+    let (world, ids, index) = data::city_world(&city);
+    let world = Arc::new(world);
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a pool");
+    let (spatial1, tw1, _) = build(|| pool.install(|| Spatial::build(world.clone())));
+    drop(spatial1);
+    let (mut spatial, tw, bw) = build(|| Spatial::build(world.clone()));
+    let rstar_items = |city: &[Building]| -> Vec<Item> {
+        city.iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let (lo, hi) = b.bounds();
+                rstar_item(lo, hi, i as u32)
+            })
+            .collect()
+    };
+    let (mut rtree, tr, br) = build(|| RTree::bulk_load(rstar_items(&city)));
+    let (mut bvh, tp, bp) = build(|| {
+        Bvh::from_iter(
+            BvhBuildStrategy::Binned,
+            city.iter().enumerate().map(|(i, b)| {
+                let (lo, hi) = b.bounds();
+                (i, parry_box(lo, hi))
+            }),
+        )
+    });
+    let ms = |t: f64| format!("{:.0} ms", t * 1e3);
+    table.row(
+        set,
+        "build",
+        format!(
+            "{} on {} threads ({} on one)",
+            ms(tw),
+            rayon::current_num_threads(),
+            ms(tw1)
+        ),
+        ms(tr),
+        ms(tp),
+    );
+    let boxes = city.len() * std::mem::size_of::<Building>();
+    table.row(
+        set,
+        "bytes held by the index",
+        format!("{} (heap_bytes {})", mb(bw), mb(spatial.heap_bytes())),
+        format!("{} (+ {} box data)", mb(br), mb(boxes)),
+        format!(
+            "{} (heap_memory_size {}; + {} box data)",
+            mb(bp),
+            mb(bvh.heap_memory_size()),
+            mb(boxes)
+        ),
+    );
+
+    fn winged_q(
+        spatial: &Spatial,
+        index: &HashMap<u64, u32>,
+        c: DVec3,
+        r: f64,
+        detail: Detail,
+    ) -> Vec<u32> {
+        let q = SphereQuery::new(c, r).with_detail(detail);
+        let a = spatial.sphere(&q).expect("a valid query");
+        a.bodies.iter().map(|b| index[&b.id]).collect()
+    }
+    fn rstar_q(tree: &RTree<Item>, city: &[Building], c: DVec3, r: f64) -> Vec<u32> {
+        let mut out = Vec::new();
+        for t in tree.locate_in_envelope_intersecting(rstar_ball(c, r)) {
+            if city[t.data as usize].meets_ball(c, r) {
+                out.push(t.data);
+            }
+        }
+        out
+    }
+    fn parry_q(bvh: &Bvh, city: &[Building], c: DVec3, r: f64) -> Vec<u32> {
+        let (lo, hi) = ball_box(c, r);
+        let b = parry_box(lo, hi);
+        let mut out = Vec::new();
+        for i in bvh.intersect_aabb(&b) {
+            if city[i as usize].meets_ball(c, r) {
+                out.push(i);
+            }
+        }
+        out
+    }
+    let check = |spatial: &Spatial, rtree: &RTree<Item>, bvh: &Bvh, city: &[Building], r| {
+        for &c in &centers_for_check() {
+            let w = sorted(winged_q(spatial, &index, c, r, Detail::Bodies));
+            assert_eq!(
+                w,
+                sorted(rstar_q(rtree, city, c, r)),
+                "rstar differs at {c}"
+            );
+            assert_eq!(
+                w,
+                sorted(parry_q(bvh, city, c, r)),
+                "parry3d differs at {c}"
+            );
+        }
+    };
+
+    let centers = data::city_centers(QUERIES, 2);
+    let mut radii = Vec::new();
+    for target in [15.0, 120.0] {
+        let r = data::calibrate(target, &centers[..CALIBRATION], 1.0, 400.0, |c, r| {
+            rstar_q(&rtree, &city, c, r).len()
+        });
+        radii.push(r);
+        check(&spatial, &rtree, &bvh, &city, r);
+        let (w, hw) = data::time_each(&centers, |c| {
+            winged_q(&spatial, &index, c, r, Detail::Bodies).len()
+        });
+        let (rr, hr) = data::time_each(&centers, |c| rstar_q(&rtree, &city, c, r).len());
+        let (p, hp) = data::time_each(&centers, |c| parry_q(&bvh, &city, c, r).len());
+        assert_eq!(hw, hr);
+        assert_eq!(hw, hp);
+        table.timings(
+            set,
+            &format!("sphere, bodies, radius {r:.2} m, mean {hw:.1} bodies"),
+            w,
+            rr,
+            p,
+        );
+        let (wf, _) = data::time_each(&centers, |c| {
+            let q = SphereQuery::new(c, r).with_detail(Detail::Features);
+            spatial.sphere(&q).expect("a valid query").bodies.len()
+        });
+        let f = |t: Timings| format!("{:.2} / {:.2} ({:.2})", t.p50, t.p99, t.mean);
+        table.row(
+            set,
+            &format!("sphere, features (faces, edges, vertices of each body), radius {r:.2} m"),
+            f(wf),
+            "—".into(),
+            "—".into(),
+        );
+    }
+
+    // Moves: the same MOVES bodies, shifts and order for every index.
+    let mut rng = data::Rng::new(3);
+    let moves: Vec<(usize, DVec3)> = (0..MOVES)
+        .map(|_| {
+            let k = (rng.next_u64() % u64::from(n)) as usize;
+            (
+                k,
+                DVec3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), 0.0),
+            )
+        })
+        .collect();
+    // Each move: the world written (cloned, the body posed) outside the timing, then
+    // each index told, in turn (the order rotates, so that none always runs first after
+    // the write has filled the caches with the new snapshot).
+    let mut current: Arc<World> = world.clone();
+    let (mut wns, mut rns, mut pns) = (Vec::new(), Vec::new(), Vec::new());
+    for (i, &(k, shift)) in moves.iter().enumerate() {
+        let (lo, hi) = city[k].bounds();
+        city[k].center += shift;
+        let (nlo, nhi) = city[k].bounds();
+        let pose = Pose::new(city[k].center, city[k].pose().rotation).expect("a pose");
+        let next = data::moved(&current, ids[k], pose);
+        let old = rstar_item(lo, hi, k as u32);
+        let new = rstar_item(nlo, nhi, k as u32);
+        let b = parry_box(nlo, nhi);
+        for engine in (0..3).map(|e| (e + i) % 3) {
+            match engine {
+                0 => {
+                    let t = Instant::now();
+                    let stats = spatial.sync(next.clone(), Some(&[ids[k]]));
+                    wns.push(t.elapsed().as_nanos() as f64);
+                    assert_eq!(stats.moved, 1);
+                }
+                1 => {
+                    let t = Instant::now();
+                    let gone = rtree.remove(&old);
+                    rtree.insert(new);
+                    rns.push(t.elapsed().as_nanos() as f64);
+                    assert!(gone.is_some());
+                }
+                _ => {
+                    let t = Instant::now();
+                    bvh.insert(b, k as u32);
+                    pns.push(t.elapsed().as_nanos() as f64);
+                }
+            }
+        }
+        current = next;
+    }
+    table.timings(
+        set,
+        &format!("move one body: {MOVES} distinct bodies, each after a world write"),
+        Timings::of(&mut wns),
+        Timings::of(&mut rns),
+        Timings::of(&mut pns),
+    );
+
+    // Warm: one body moved back and forth between two places, WARM times (an even
+    // number, so it ends where it began); the mean per move.
+    let k = ids.len() / 2 + data::CITY_NX / 2;
+    let a = current.clone();
+    let (lo, hi) = city[k].bounds();
+    let mut there = city[k];
+    there.center += DVec3::new(4.0, 3.0, 0.0);
+    let (nlo, nhi) = there.bounds();
+    let b = data::moved(&a, ids[k], there.pose());
+    let t = Instant::now();
+    for i in 0..WARM {
+        let w = if i % 2 == 0 { b.clone() } else { a.clone() };
+        std::hint::black_box(spatial.sync(w, Some(&[ids[k]])));
+    }
+    let w = t.elapsed().as_nanos() as f64 / WARM as f64 / 1e3;
+    let items = [rstar_item(lo, hi, k as u32), rstar_item(nlo, nhi, k as u32)];
+    let t = Instant::now();
+    for i in 0..WARM {
+        assert!(rtree.remove(&items[i % 2]).is_some());
+        rtree.insert(items[(i + 1) % 2]);
+    }
+    let r = t.elapsed().as_nanos() as f64 / WARM as f64 / 1e3;
+    let boxes = [parry_box(nlo, nhi), parry_box(lo, hi)];
+    let t = Instant::now();
+    for i in 0..WARM {
+        bvh.insert(boxes[i % 2], k as u32);
+    }
+    let p = t.elapsed().as_nanos() as f64 / WARM as f64 / 1e3;
+    let f = |x: f64| format!("{x:.2}");
+    table.row(
+        set,
+        &format!("move one body: the same body back and forth, mean of {WARM}"),
+        f(w),
+        f(r),
+        f(p),
+    );
+    for &r in &radii {
+        check(&spatial, &rtree, &bvh, &city, r);
+    }
+    drop(current);
+}
+
+fn centers_for_check() -> Vec<DVec3> {
+    data::city_centers(CHECKED, 2)
+}
+
+/// `profile <terrain|city> <hits> <bodies|features> [seconds]`: winged's sphere queries
+/// alone in a loop (about `hits` hits each), for `perf record`.
+fn profile(args: &[String]) {
+    let set = args.first().map_or("city", String::as_str);
+    let target: f64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(15.0);
+    let detail = match args.get(2).map(String::as_str) {
+        Some("bodies") => Detail::Bodies,
+        _ => Detail::Features,
+    };
+    let seconds: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(10.0);
+    let (world, centers, count): (World, Vec<DVec3>, fn(&Spatial, DVec3, f64) -> usize) =
+        if set == "terrain" {
+            let t = Terrain::new();
+            let centers = t.centers(QUERIES, 1);
+            (t.world().0, centers, |s, c, r| {
+                let q = SphereQuery::new(c, r).with_detail(Detail::Features);
+                let a = s.sphere(&q).expect("a valid query");
+                a.bodies
+                    .iter()
+                    .map(|b| b.faces.as_ref().map_or(0, Vec::len))
+                    .sum()
+            })
+        } else {
+            let city = data::city();
+            (
+                data::city_world(&city).0,
+                data::city_centers(QUERIES, 2),
+                |s, c, r| {
+                    let q = SphereQuery::new(c, r).with_detail(Detail::Bodies);
+                    s.sphere(&q).expect("a valid query").bodies.len()
+                },
+            )
+        };
+    let spatial = Spatial::build(Arc::new(world));
+    let hi = if set == "terrain" { 20.0 } else { 400.0 };
+    let r = data::calibrate(target, &centers[..CALIBRATION], 0.01, hi, |c, r| {
+        count(&spatial, c, r)
+    });
+    println!("{set}: radius {r:.3} for about {target} hits; querying for {seconds} s");
+    if set == "terrain" {
+        // How many faces the body's hierarchy leaves for the exact test.
+        let (_, body) = spatial
+            .world()
+            .bodies()
+            .find(|(_, n)| n.body.face_count() > 0)
+            .expect("the terrain");
+        let shape = winged::spatial::shape::BodyShape::build(body.body.clone());
+        let sample = &centers[..CALIBRATION];
+        let mut visited = 0usize;
+        for &c in sample {
+            shape.bvh.within(c, r * r, |_| visited += 1);
+        }
+        println!(
+            "{:.1} faces per query in the leaves the hierarchy visits",
+            visited as f64 / sample.len() as f64
+        );
+    } else {
+        // How many bodies the top hierarchy leaves for the exact test: those whose world
+        // bounds lie within the radius.
+        let city = data::city();
+        let sample = &centers[..CALIBRATION];
+        let within: usize = sample
+            .iter()
+            .map(|&c| {
+                city.iter()
+                    .filter(|b| {
+                        let (lo, hi) = b.bounds();
+                        (lo - c).max(c - hi).max(DVec3::ZERO).length_squared() <= r * r
+                    })
+                    .count()
+            })
+            .sum();
+        println!(
+            "{:.1} bodies per query have bounds within the radius",
+            within as f64 / sample.len() as f64
+        );
+    }
+    let start = Instant::now();
+    let mut n = 0usize;
+    while start.elapsed().as_secs_f64() < seconds {
+        for &c in &centers {
+            let q = SphereQuery::new(c, r).with_detail(detail);
+            std::hint::black_box(spatial.sphere(&q).expect("a valid query"));
+        }
+        n += centers.len();
+    }
+    let us = start.elapsed().as_secs_f64() * 1e6 / n as f64;
+    println!("{n} queries, {us:.2} µs each");
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("profile") {
+        profile(&args[1..]);
+        return;
+    }
+    let which = args.first().cloned().unwrap_or_default();
+    println!(
+        "{} cores; load average at start {}; rayon threads {}",
+        std::thread::available_parallelism().map_or(0, |n| n.get()),
+        loadavg(),
+        rayon::current_num_threads()
+    );
+    let mut table = Table::default();
+    if which.is_empty() || which == "terrain" {
+        terrain(&mut table);
+    }
+    if which.is_empty() || which == "city" {
+        city(&mut table);
+    }
+    table.print();
+    println!("load average at end {}", loadavg());
+}
