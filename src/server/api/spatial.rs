@@ -2,8 +2,10 @@
 //! with a query string and as a `POST` with a JSON body.
 //!
 //! One [`Spatial`] index is shared by every request ([`SpatialAccess`]). A query takes a
-//! snapshot of the world and, on a blocking thread, answers from the index when it is at
-//! (or past) the snapshot's revision. Otherwise the index is first brought up to the
+//! snapshot of the world and answers from the index when it is at (or past) the
+//! snapshot's revision: on the async thread itself when the answer fits a small budget
+//! (a few thousand features, a few hundred bodies), else on a blocking thread.
+//! Otherwise the index is first brought up to the
 //! snapshot under the write lock: built whole the first time; afterwards synced with the
 //! bodies the change feed names since the index's revision, or, when the feed no longer
 //! covers that gap, by comparing every body. Answers carry the index's revision in the
