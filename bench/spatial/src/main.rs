@@ -545,6 +545,9 @@ fn centers_for_check() -> Vec<DVec3> {
     data::city_centers(CHECKED, 2)
 }
 
+/// How many hits a query answers (faces of the terrain, bodies of the city).
+type HitCount = fn(&Spatial, DVec3, f64) -> usize;
+
 /// `profile <terrain|city> <hits> <bodies|features> [seconds]`: winged's sphere queries
 /// alone in a loop (about `hits` hits each), for `perf record`.
 fn profile(args: &[String]) {
@@ -555,29 +558,28 @@ fn profile(args: &[String]) {
         _ => Detail::Features,
     };
     let seconds: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(10.0);
-    let (world, centers, count): (World, Vec<DVec3>, fn(&Spatial, DVec3, f64) -> usize) =
-        if set == "terrain" {
-            let t = Terrain::new();
-            let centers = t.centers(QUERIES, 1);
-            (t.world().0, centers, |s, c, r| {
-                let q = SphereQuery::new(c, r).with_detail(Detail::Features);
-                let a = s.sphere(&q).expect("a valid query");
-                a.bodies
-                    .iter()
-                    .map(|b| b.faces.as_ref().map_or(0, Vec::len))
-                    .sum()
-            })
-        } else {
-            let city = data::city();
-            (
-                data::city_world(&city).0,
-                data::city_centers(QUERIES, 2),
-                |s, c, r| {
-                    let q = SphereQuery::new(c, r).with_detail(Detail::Bodies);
-                    s.sphere(&q).expect("a valid query").bodies.len()
-                },
-            )
-        };
+    let (world, centers, count): (World, Vec<DVec3>, HitCount) = if set == "terrain" {
+        let t = Terrain::new();
+        let centers = t.centers(QUERIES, 1);
+        (t.world().0, centers, |s, c, r| {
+            let q = SphereQuery::new(c, r).with_detail(Detail::Features);
+            let a = s.sphere(&q).expect("a valid query");
+            a.bodies
+                .iter()
+                .map(|b| b.faces.as_ref().map_or(0, Vec::len))
+                .sum()
+        })
+    } else {
+        let city = data::city();
+        (
+            data::city_world(&city).0,
+            data::city_centers(QUERIES, 2),
+            |s, c, r| {
+                let q = SphereQuery::new(c, r).with_detail(Detail::Bodies);
+                s.sphere(&q).expect("a valid query").bodies.len()
+            },
+        )
+    };
     let spatial = Spatial::build(Arc::new(world));
     let hi = if set == "terrain" { 20.0 } else { 400.0 };
     let r = data::calibrate(target, &centers[..CALIBRATION], 0.01, hi, |c, r| {
