@@ -113,19 +113,13 @@ fn build<T>(mut f: impl FnMut() -> T) -> (T, f64, usize) {
     (x, times[1], bytes)
 }
 
-/// An `f32` box holding the `f64` box `lo..=hi` (each bound rounded outward).
+/// An `f32` box holding the `f64` box `lo..=hi` (each bound rounded outward, as
+/// winged's own hierarchy rounds its boxes).
 fn parry_box(lo: DVec3, hi: DVec3) -> PAabb {
-    let down = |x: f64| {
-        let y = x as f32;
-        if f64::from(y) > x { y.next_down() } else { y }
-    };
-    let up = |x: f64| {
-        let y = x as f32;
-        if f64::from(y) < x { y.next_up() } else { y }
-    };
+    let (min, max) = winged::spatial::aabb::Aabb::new(lo, hi).to_f32_outward();
     PAabb::new(
-        PVec::new(down(lo.x), down(lo.y), down(lo.z)),
-        PVec::new(up(hi.x), up(hi.y), up(hi.z)),
+        PVec::new(min[0], min[1], min[2]),
+        PVec::new(max[0], max[1], max[2]),
     )
 }
 
