@@ -90,7 +90,8 @@ pub struct EntityChange {
 }
 
 impl EntityChange {
-    fn body(action: Action, id: u64, fields: &[Field]) -> Self {
+    /// Body `id` touched by `action`, with the `fields` an update changed.
+    pub(crate) fn body(action: Action, id: u64, fields: &[Field]) -> Self {
         EntityChange {
             action,
             kind: Kind::Body,

@@ -685,13 +685,7 @@ mod tests {
     use crate::server::changes::{Change, EntityChange};
 
     fn body(action: Action, id: u64, fields: &[Field]) -> EntityChange {
-        EntityChange {
-            action,
-            kind: Kind::Body,
-            id: Some(id),
-            name: None,
-            fields: fields.to_vec(),
-        }
+        EntityChange::body(action, id, fields)
     }
 
     fn change(revision: u64, changes: Vec<EntityChange>) -> Change {
