@@ -399,6 +399,22 @@ fn answers_follow_a_moved_body_with_the_new_revision() {
     let c = add_box(&s, "c", [0.0, -5.0, 0.0]);
     let found = s.get("/v1/spatial/box?min_x=-1&min_y=-7&min_z=-1&max_x=1&max_y=-3&max_z=1");
     assert_eq!(ids(&found.ok()["bodies"]), vec![c]);
+
+    // A new name is answered at once, at every detail and by every query.
+    s.patch(&format!("/v1/bodies/{a}"), &json!({"name": "renamed"}))
+        .ok();
+    for detail in ["bodies", "features"] {
+        let named = s
+            .get(&format!(
+                "/v1/spatial/sphere?x=11&y=11&z=1&r=0.5&detail={detail}"
+            ))
+            .ok();
+        assert_eq!(named["bodies"][0]["name"], "renamed", "{named}");
+    }
+    let near = s.get("/v1/spatial/nearest?x=11&y=13&z=0").ok();
+    assert_eq!(near["hit"]["name"], "renamed", "{near}");
+    let h = s.get("/v1/spatial/ray?x=20&y=10&z=0&dx=-1&dy=0&dz=0").ok();
+    assert_eq!(h["hit"]["name"], "renamed", "{h}");
 }
 
 #[test]

@@ -270,6 +270,31 @@ fn check_sphere(index: &Spatial, w: &World, c: DVec3, r: f64) -> usize {
             assert!(close(v.position, t.vertices[&v.id]));
         }
     }
+    // At `bodies` detail (where small convex bodies take their own path): the same
+    // bodies, inside flags and distances.
+    let bodies = index
+        .sphere(&SphereQuery::new(c, r).with_detail(Detail::Bodies))
+        .expect("valid query");
+    let mut got: Vec<(u64, bool, f64)> = bodies
+        .bodies
+        .iter()
+        .map(|b| (b.id, b.inside, b.distance.expect("distance")))
+        .collect();
+    got.sort_unstable_by_key(|b| b.0);
+    assert_eq!(
+        got.iter().map(|b| b.0).collect::<Vec<_>>(),
+        want,
+        "bodies at `bodies` detail in the ball at {c} r {r}"
+    );
+    for (id, inside, d) in got {
+        let t = &truth[&id];
+        assert_eq!(inside, t.inside, "inside of {id} at `bodies` detail");
+        assert!(
+            (d - t.distance).abs() <= 1e-9,
+            "distance of {id} at `bodies` detail: {d} vs {}",
+            t.distance
+        );
+    }
     answer.bodies.len()
 }
 

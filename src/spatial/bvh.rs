@@ -173,6 +173,14 @@ impl Bvh {
         self.order.is_empty()
     }
 
+    /// Renumbers the primitives by leaf position (`order()[k] == k` afterwards), for a
+    /// caller that has laid its primitive data out in [`Bvh::order`].
+    pub fn identity_order(&mut self) {
+        for (k, i) in self.order.iter_mut().enumerate() {
+            *i = k as u32;
+        }
+    }
+
     /// Heap bytes held.
     pub fn heap_bytes(&self) -> usize {
         self.nodes.capacity() * std::mem::size_of::<Node>() + self.order.capacity() * 4

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 
 use super::aabb::Aabb;
 use super::bvh::Bvh;
+use super::hull::{HullRef, Hulls};
 use super::query::{
     BodyHit, BoxAnswer, BoxQuery, Detail, Found, Nearest, QueryError, RayHit, SphereAnswer,
     SphereQuery, validate_point, validate_ray,
@@ -26,17 +27,24 @@ use crate::model::{Body, BodyId, Pose, World};
 
 /// Loose entries (not yet under the hierarchy) tolerated before a rebuild.
 const LOOSE_MAX: usize = 64;
+/// Numbers held by released hull records tolerated before a rebuild (besides half of
+/// all).
+const HULL_GARBAGE_MIN: usize = 1 << 16;
 /// The most primitives a hierarchy leaf holds.
 const LEAF_BOXES: usize = super::bvh::LEAF_LIMIT;
 
 /// One body in the index.
 struct Entry {
     id: BodyId,
+    /// The body's name, kept here so that answers need not look it up in the world.
+    name: Option<Box<str>>,
     shape: Arc<BodyShape>,
     pose: Pose,
     inverse: Pose,
     /// World bounds of the shape (empty for a removed body).
     bounds: Aabb,
+    /// The body's record among the index's [`Hulls`], when it is small and convex.
+    hull: Option<HullRef>,
 }
 
 /// How much work a [`Spatial::sync`] did.
@@ -68,6 +76,8 @@ pub struct Spatial {
     position: Vec<u32>,
     /// Entries not under the hierarchy yet.
     loose: Vec<u32>,
+    /// The records of the small convex bodies, in leaf order as of the last build.
+    hulls: Hulls,
     /// Entries emptied by removals.
     dead: usize,
     /// Surface area gained by refits since the last build, and the area then.
@@ -96,6 +106,7 @@ impl Spatial {
             leaf_of: Vec::new(),
             position: Vec::new(),
             loose: Vec::new(),
+            hulls: Hulls::default(),
             dead: 0,
             growth: 0.0,
             built_area: 0.0,
@@ -103,7 +114,7 @@ impl Spatial {
         for ((id, _), shape) in bodies.into_iter().zip(shapes) {
             let pose = world.world_pose(id).unwrap_or_default();
             s.by_id.insert(id, s.entries.len() as u32);
-            s.entries.push(entry(id, shape, pose));
+            s.entries.push(entry(id, world.name(id), shape, pose));
         }
         s.rebuild();
         s
@@ -142,22 +153,26 @@ impl Spatial {
             + self.entries.capacity() * std::mem::size_of::<Entry>()
             + self.by_id.capacity() * 16
             + self.bvh.heap_bytes()
+            + self.hulls.heap_bytes()
             + (self.parents.capacity() + self.leaf_of.capacity() + self.position.capacity()) * 4
     }
 
     /// Brings the index to `world`. `touched` lists the bodies changed since the
-    /// index's revision (their parts are followed); `None` compares every body.
+    /// index's revision (the parts of one whose world pose changed, or which has no
+    /// entry, are followed); `None` compares every body.
     ///
-    /// Precondition: with `touched`, every body added, removed, moved, re-parented or
-    /// edited since the index's revision is listed (or is a part of one listed).
+    /// Precondition: with `touched`, every body added, removed, moved, re-parented,
+    /// renamed or edited since the index's revision is listed (or is a part of one
+    /// listed).
     pub fn sync(&mut self, world: Arc<World>, touched: Option<&[BodyId]>) -> SyncStats {
         let mut stats = SyncStats::default();
         match touched {
             Some(ids) => {
                 let mut stack: Vec<BodyId> = ids.to_vec();
                 while let Some(id) = stack.pop() {
-                    self.refresh(&world, id, &mut stats);
-                    if let Some(parts) = world.parts(id) {
+                    if self.refresh(&world, id, &mut stats)
+                        && let Some(parts) = world.parts(id)
+                    {
                         stack.extend_from_slice(parts);
                     }
                 }
@@ -182,6 +197,7 @@ impl Spatial {
         if self.loose.len() > LOOSE_MAX
             || self.dead > LOOSE_MAX.max(self.entries.len() / 4)
             || self.growth > self.built_area.max(f64::MIN_POSITIVE)
+            || self.hulls.garbage() > HULL_GARBAGE_MIN.max(self.hulls.size() / 2)
         {
             self.rebuild();
             stats.rebuilt = true;
@@ -189,45 +205,73 @@ impl Spatial {
         stats
     }
 
-    /// Brings body `id`'s entry in line with `world`.
-    fn refresh(&mut self, world: &World, id: BodyId, stats: &mut SyncStats) {
+    /// Brings body `id`'s entry in line with `world`. Answers whether the body's parts
+    /// may have moved with it: `false` only when it has an entry whose world pose is
+    /// unchanged.
+    fn refresh(&mut self, world: &World, id: BodyId, stats: &mut SyncStats) -> bool {
         let node = world.node(id).filter(|n| n.body.vertex_count() > 0);
         let at = self.by_id.get(&id).copied();
         match (node, at) {
-            (None, None) => {}
+            (None, None) => true,
             (None, Some(i)) => {
                 self.by_id.remove(&id);
-                self.entries[i as usize].bounds = Aabb::EMPTY;
+                let e = &mut self.entries[i as usize];
+                e.bounds = Aabb::EMPTY;
+                if let Some(h) = e.hull.take() {
+                    self.hulls.release(h);
+                }
                 self.refit(i);
                 self.dead += 1;
                 stats.removed += 1;
+                true
             }
             (Some(n), None) => {
                 let pose = world.world_pose(id).unwrap_or_default();
                 let shape = Arc::new(BodyShape::build(n.body.clone()));
                 let i = self.entries.len() as u32;
-                self.entries.push(entry(id, shape, pose));
+                let mut e = entry(id, n.name.as_deref(), shape, pose);
+                e.hull = self.hulls.add(&e.shape, &e.pose);
+                self.entries.push(e);
                 self.position.push(u32::MAX);
                 self.by_id.insert(id, i);
                 self.loose.push(i);
                 stats.added += 1;
                 stats.shaped += 1;
+                true
             }
             (Some(n), Some(i)) => {
                 let pose = world.world_pose(id).unwrap_or_default();
                 let e = &mut self.entries[i as usize];
+                if e.name.as_deref() != n.name.as_deref() {
+                    e.name = n.name.as_deref().map(Box::from);
+                }
                 let reshaped = !Arc::ptr_eq(e.shape.body(), &n.body);
                 if reshaped {
                     e.shape = Arc::new(BodyShape::build(n.body.clone()));
                     stats.shaped += 1;
                 }
-                if reshaped || e.pose != pose {
-                    *e = entry(id, e.shape.clone(), pose);
+                let moved = e.pose != pose;
+                if reshaped || moved {
+                    let hull = e.hull;
+                    *e = entry(id, n.name.as_deref(), e.shape.clone(), pose);
+                    e.hull = match hull {
+                        Some(h) if !reshaped => {
+                            self.hulls.pose(h, &e.shape, &e.pose);
+                            Some(h)
+                        }
+                        _ => {
+                            if let Some(h) = hull {
+                                self.hulls.release(h);
+                            }
+                            self.hulls.add(&e.shape, &e.pose)
+                        }
+                    };
                     if !reshaped {
                         stats.moved += 1;
                     }
                     self.refit(i);
                 }
+                moved
             }
         }
     }
@@ -250,23 +294,37 @@ impl Spatial {
         self.growth += self.bvh.refit(&self.parents, leaf, |k| boxes[k - first]);
     }
 
-    /// Builds the hierarchy anew over the live entries (dropping removed ones).
+    /// Builds the hierarchy anew over the live entries (dropping removed ones), and lays
+    /// the entries out in its leaf order, so that bodies near each other in space are
+    /// near each other in memory.
     fn rebuild(&mut self) {
         self.entries.retain(|e| !e.bounds.is_empty());
+        let boxes: Vec<Aabb> = self.entries.iter().map(|e| e.bounds).collect();
+        self.bvh = Bvh::build(&boxes);
+        let mut slots: Vec<Option<Entry>> = std::mem::take(&mut self.entries)
+            .into_iter()
+            .map(Some)
+            .collect();
+        self.entries = self
+            .bvh
+            .order()
+            .iter()
+            .filter_map(|&i| slots[i as usize].take())
+            .collect();
+        self.bvh.identity_order();
+        self.hulls = Hulls::default();
+        for e in &mut self.entries {
+            e.hull = self.hulls.add(&e.shape, &e.pose);
+        }
         self.by_id = self
             .entries
             .iter()
             .enumerate()
             .map(|(i, e)| (e.id, i as u32))
             .collect();
-        let boxes: Vec<Aabb> = self.entries.iter().map(|e| e.bounds).collect();
-        self.bvh = Bvh::build(&boxes);
         self.parents = self.bvh.parents();
         self.leaf_of = self.bvh.leaf_of_positions();
-        self.position = vec![u32::MAX; self.entries.len()];
-        for (k, &i) in self.bvh.order().iter().enumerate() {
-            self.position[i as usize] = k as u32;
-        }
+        self.position = (0..self.entries.len() as u32).collect();
         self.loose.clear();
         self.dead = 0;
         self.growth = 0.0;
@@ -295,7 +353,7 @@ impl Spatial {
     fn hit(&self, e: &Entry, distance: Option<f64>, inside: bool) -> BodyHit {
         BodyHit {
             id: e.id.get(),
-            name: self.world.name(e.id).map(str::to_owned),
+            name: e.name.as_deref().map(str::to_owned),
             distance,
             inside,
             faces: None,
@@ -310,6 +368,16 @@ impl Spatial {
         let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies);
         self.entries_within(q.center, cull_radius2(q.radius), |e| {
             if hits.full {
+                return;
+            }
+            if let Some(decided) = e
+                .hull
+                .filter(|_| q.detail == Detail::Bodies)
+                .and_then(|h| self.hulls.ball(h, q.center, q.radius))
+            {
+                if let Some((distance, inside)) = decided {
+                    hits.push(self.hit(e, Some(distance), inside), Features::default());
+                }
                 return;
             }
             let mut f = Features::default();
@@ -406,7 +474,7 @@ impl Spatial {
             }
             best = Some(Nearest {
                 id: e.id.get(),
-                name: None,
+                name: e.name.as_deref().map(str::to_owned),
                 distance: d2.sqrt(),
                 inside,
                 surface_distance: cl.d2.sqrt(),
@@ -423,16 +491,9 @@ impl Spatial {
             b2 = consider(&self.entries[i as usize], b2);
         }
         let _ = b2;
-        let hit = best.map(|mut n| {
-            n.name = self
-                .world
-                .name(BodyId(crate::model::Serial(n.id)))
-                .map(str::to_owned);
-            n
-        });
         Ok(Found {
             revision: self.revision(),
-            hit,
+            hit: best,
         })
     }
 
@@ -480,7 +541,7 @@ impl Spatial {
             let normal = e.pose.transform_vector(f.normal);
             RayHit {
                 id: e.id.get(),
-                name: self.world.name(e.id).map(str::to_owned),
+                name: e.name.as_deref().map(str::to_owned),
                 face: f.serial,
                 point: origin + d * t,
                 distance: t,
@@ -552,14 +613,16 @@ impl Hits {
     }
 }
 
-fn entry(id: BodyId, shape: Arc<BodyShape>, pose: Pose) -> Entry {
+fn entry(id: BodyId, name: Option<&str>, shape: Arc<BodyShape>, pose: Pose) -> Entry {
     let bounds = shape.bounds.transformed(&pose);
     Entry {
         id,
+        name: name.map(Box::from),
         inverse: pose.inverse(),
         shape,
         pose,
         bounds,
+        hull: None,
     }
 }
 

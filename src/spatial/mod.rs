@@ -15,6 +15,7 @@
 pub mod aabb;
 pub mod bvh;
 pub mod exact;
+mod hull;
 pub mod index;
 pub mod query;
 mod reach;

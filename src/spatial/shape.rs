@@ -25,6 +25,9 @@ pub const NO_EDGE: u32 = u32::MAX;
 pub const REPORT_EDGE: u8 = 1;
 /// Corner flag: this corner reports its starting vertex.
 pub const REPORT_VERTEX: u8 = 2;
+/// The most faces a body may have for its convexity to be checked and used: the
+/// check costs faces × vertices, and the convex tests visit every face.
+pub const CONVEX_MAX_FACES: usize = 64;
 
 /// One corner of a face perimeter: the use of `edge` starting at `vertex`.
 #[derive(Clone, Copy, Debug)]
@@ -87,6 +90,12 @@ pub struct BodyShape {
     pub bounds: Aabb,
     /// Length of the bounds' diagonal (the scale of tolerances).
     pub size: f64,
+    /// Whether the solid is a convex polytope of at most [`CONVEX_MAX_FACES`] faces:
+    /// one shell of genus 0, no face without a plane, every vertex on or behind every
+    /// face plane (within [`BodyShape::surface_eps`]) and some vertex well behind each
+    /// (so that the solid has volume). The solid is then the intersection of its faces'
+    /// half-spaces, which [`BodyShape::plane_side`] tests.
+    pub convex: bool,
 }
 
 impl BodyShape {
@@ -182,6 +191,7 @@ impl BodyShape {
         } else {
             (bounds.max - bounds.min).length()
         };
+        let convex = is_convex(b, &ordered, &points, surface_eps(size));
         BodyShape {
             body,
             points,
@@ -192,7 +202,30 @@ impl BodyShape {
             bvh,
             bounds,
             size,
+            convex,
         }
+    }
+
+    /// How near the surface a point counts as on it: a billionth of the body's size.
+    #[inline]
+    pub fn surface_eps(&self) -> f64 {
+        surface_eps(self.size)
+    }
+
+    /// The largest signed distance of `p` from a face plane, and that face: for a
+    /// [`convex`](BodyShape::convex) shape, `p` is inside the solid exactly when it is
+    /// not positive, and outside by at least it otherwise. `None` for a shape without
+    /// faces.
+    #[inline]
+    pub fn plane_side(&self, p: DVec3) -> Option<(f64, usize)> {
+        let mut best: Option<(f64, usize)> = None;
+        for (k, f) in self.faces.iter().enumerate() {
+            let pd = f.normal.dot(p) - f.offset;
+            if best.is_none_or(|(b, _)| pd > b) {
+                best = Some((pd, k));
+            }
+        }
+        best
     }
 
     /// The body this shape was built from.
@@ -281,7 +314,16 @@ impl BodyShape {
         if !self.bounds.contains_point(p) {
             return false;
         }
-        let eps = self.size * 1e-9;
+        let eps = self.surface_eps();
+        if self.convex {
+            // Inside every half-space, or beyond one by more than the surface's
+            // thickness; between, the general test below decides.
+            match self.plane_side(p) {
+                Some((pd, _)) if pd <= 0.0 => return true,
+                Some((pd, _)) if pd > eps => return false,
+                _ => {}
+            }
+        }
         // On an edge or at a vertex a point is on no face's interior, which the crossing
         // count cannot see: a point on the surface is found first, as inside.
         if self
@@ -346,6 +388,29 @@ impl BodyShape {
         });
         found
     }
+}
+
+/// How near the surface of a body of diagonal `size` a point counts as on it.
+#[inline]
+fn surface_eps(size: f64) -> f64 {
+    size * 1e-9
+}
+
+/// Whether `body` (laid out as `faces` over `points`) is a convex polytope of at most
+/// [`CONVEX_MAX_FACES`] faces: see [`BodyShape::convex`]. A solid with volume, of one
+/// shell and genus 0, whose every vertex lies behind every face plane is the convex hull
+/// of its vertices (a second shell, a cavity, a dent or a tunnel would put some vertex
+/// in front of some face; a flat lamina has no vertex behind its faces).
+fn is_convex(body: &Body, faces: &[FaceRec], points: &[DVec3], eps: f64) -> bool {
+    faces.len() <= CONVEX_MAX_FACES
+        && !faces.is_empty()
+        && body.euler_characteristic() == 2
+        && faces.iter().all(|f| {
+            let side = |p: &DVec3| f.normal.dot(*p) - f.offset;
+            f.normal != DVec3::ZERO
+                && points.iter().all(|p| side(p) <= eps)
+                && points.iter().any(|p| side(p) < -eps)
+        })
 }
 
 /// Directions tried in turn by [`BodyShape::contains`]: skew to every axis and every

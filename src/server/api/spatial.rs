@@ -164,8 +164,8 @@ fn bring_up(s: &mut Spatial, world: Arc<World>, feed: &Feed) {
 /// `None` when the feed no longer holds every one of those writes (it was asked too late,
 /// or the gap is longer than [`FEED_GAP_MAX`]).
 ///
-/// A body whose only changes are its list of sub-parts, its name or its colour is left
-/// out: its shape and pose are as they were, and each part added to or taken from it is
+/// A body whose only changes are its list of sub-parts or its colour is left out: its
+/// shape, pose and name are as they were, and each part added to or taken from it is
 /// named on its own. (Every creation updates its supart's parts; following those would
 /// revisit the whole world under the world body.)
 fn touched_between(feed: &Feed, from: u64, to: u64) -> Option<Vec<BodyId>> {
@@ -192,7 +192,7 @@ fn touched_between(feed: &Feed, from: u64, to: u64) -> Option<Vec<BodyId>> {
                 && !e.fields.is_empty()
                 && e.fields
                     .iter()
-                    .all(|f| matches!(f, Field::Parts | Field::Name | Field::Color)))
+                    .all(|f| matches!(f, Field::Parts | Field::Color)))
         })
         .filter_map(|e| e.id)
         .map(|id| BodyId(Serial(id)))
@@ -714,15 +714,17 @@ mod tests {
                     5,
                     vec![
                         body(Action::Updated, 7, &[Field::Pose]),
-                        body(Action::Updated, 8, &[Field::Name, Field::Color]),
+                        body(Action::Updated, 8, &[Field::Color]),
+                        body(Action::Updated, 6, &[Field::Name, Field::Color]),
                         body(Action::Removed, 9, &[]),
                     ],
                 ),
             ],
         );
         let ids = |v: Option<Vec<BodyId>>| v.map(|v| v.iter().map(|b| b.get()).collect::<Vec<_>>());
-        assert_eq!(ids(touched_between(&feed, 2, 5)), Some(vec![7, 8, 9]));
-        assert_eq!(ids(touched_between(&feed, 4, 5)), Some(vec![7, 9]));
+        assert_eq!(ids(touched_between(&feed, 2, 5)), Some(vec![6, 7, 8, 9]));
+        // A colour alone is not a change to the index; a name is.
+        assert_eq!(ids(touched_between(&feed, 4, 5)), Some(vec![6, 7, 9]));
         // Older than the history: the feed cannot tell.
         assert_eq!(ids(touched_between(&feed, 1, 5)), None);
         // Only up to the snapshot's revision.

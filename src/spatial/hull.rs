@@ -1,0 +1,314 @@
+//! Small convex solids as flat records in world coordinates, for the sphere query at
+//! `bodies` detail: the face planes, the vertex loci and the edges of each
+//! [`convex`](BodyShape::convex) body, laid out one body after another in one array, in
+//! the order of the world hierarchy's leaves, so that the bodies a query meets are read
+//! from a few neighbouring cache lines instead of from each body's own allocations.
+//!
+//! A record is rewritten in place when its body moves; a body that changes shape gets a
+//! new record at the end and its old one becomes garbage, reclaimed when the index lays
+//! the records out again (see [`Hulls::garbage`]).
+
+use glam::DVec3;
+
+use super::exact::segment_closest;
+use super::shape::{BodyShape, NO_EDGE, REPORT_EDGE};
+use crate::model::Pose;
+
+/// Where one body's record lies in [`Hulls`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HullRef {
+    /// First number of the record: the surface tolerance, then 4 per plane (normal,
+    /// offset), then 3 per vertex.
+    at: u32,
+    /// First edge in [`Hulls::edges`].
+    edges_at: u32,
+    faces: u16,
+    points: u16,
+    edges: u16,
+}
+
+impl HullRef {
+    fn len(&self) -> usize {
+        1 + 4 * self.faces as usize + 3 * self.points as usize
+    }
+}
+
+/// The records of the convex bodies of an index.
+#[derive(Default)]
+pub struct Hulls {
+    data: Vec<f64>,
+    edges: Vec<[u16; 2]>,
+    /// Numbers and edges held by records no longer in use.
+    garbage: usize,
+}
+
+/// The most vertices a record holds (its edges index them with `u16`).
+const MAX_POINTS: usize = u16::MAX as usize;
+
+impl Hulls {
+    /// Adds the record of `shape` posed at `pose`; `None` when the shape is not convex
+    /// (or too large for a record).
+    pub fn add(&mut self, shape: &BodyShape, pose: &Pose) -> Option<HullRef> {
+        let room = u32::MAX as usize - 4 * MAX_POINTS;
+        if !shape.convex
+            || shape.points.len() > MAX_POINTS
+            || self.data.len() > room
+            || self.edges.len() > room
+        {
+            return None;
+        }
+        let (at, edges_at) = (self.data.len(), self.edges.len());
+        for k in 0..shape.faces.len() {
+            let cs = shape.corners_of(k);
+            let canonical = cs
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.flags & REPORT_EDGE != 0 && c.edge != NO_EDGE);
+            self.edges.extend(
+                canonical.map(|(i, c)| [c.vertex as u16, cs[(i + 1) % cs.len()].vertex as u16]),
+            );
+        }
+        // A convex shape has at most `CONVEX_MAX_FACES` faces, so its counts fit.
+        let h = HullRef {
+            at: at as u32,
+            edges_at: edges_at as u32,
+            faces: shape.faces.len() as u16,
+            points: shape.points.len() as u16,
+            edges: (self.edges.len() - edges_at) as u16,
+        };
+        self.data.resize(at + h.len(), 0.0);
+        self.pose(h, shape, pose);
+        Some(h)
+    }
+
+    /// Rewrites record `h` (of `shape`) for the body posed at `pose`.
+    pub fn pose(&mut self, h: HullRef, shape: &BodyShape, pose: &Pose) {
+        let rec = &mut self.data[h.at as usize..h.at as usize + h.len()];
+        rec[0] = shape.surface_eps();
+        let (planes, points) = rec[1..].split_at_mut(4 * h.faces as usize);
+        for (out, f) in planes.chunks_exact_mut(4).zip(&shape.faces) {
+            let n = pose.transform_vector(f.normal);
+            out[..3].copy_from_slice(&n.to_array());
+            out[3] = f.offset + n.dot(pose.position);
+        }
+        for (out, &p) in points.chunks_exact_mut(3).zip(&shape.points) {
+            out.copy_from_slice(&pose.transform_point(p).to_array());
+        }
+    }
+
+    /// Drops record `h` (it becomes garbage).
+    pub fn release(&mut self, h: HullRef) {
+        self.garbage += h.len() + h.edges as usize;
+    }
+
+    /// Numbers and edges held by released records: the index lays the records out
+    /// again when these outweigh the live ones.
+    pub fn garbage(&self) -> usize {
+        self.garbage
+    }
+
+    /// Numbers and edges held in all.
+    pub fn size(&self) -> usize {
+        self.data.len() + self.edges.len()
+    }
+
+    /// Heap bytes held.
+    pub fn heap_bytes(&self) -> usize {
+        self.data.capacity() * 8 + self.edges.capacity() * 4
+    }
+
+    /// The ball of centre `c` and radius `r` (world frame) against the body of record
+    /// `h`, as [`reach::ball`](super::reach::ball) answers it at `bodies` detail:
+    /// `Some(Some((distance, inside)))` when the solid meets the ball, `Some(None)` when
+    /// it does not, and `None` when the centre lies within the surface tolerance of the
+    /// surface or the solid's distance within rounding of `r`, for the general test to
+    /// decide.
+    ///
+    /// The centre is inside exactly when it is behind every face plane. Outside, its
+    /// distance to the solid is at least the largest plane distance; the foot of the
+    /// centre on a face plane it is in front of, when behind every other plane, is the
+    /// closest point; otherwise the closest point lies on an edge (or at a vertex), and
+    /// the least distance to an edge segment is the distance.
+    pub fn ball(&self, h: HullRef, c: DVec3, r: f64) -> Option<Option<(f64, bool)>> {
+        let rec = &self.data[h.at as usize..h.at as usize + h.len()];
+        let eps = rec[0];
+        let (planes, points) = rec[1..].split_at(4 * h.faces as usize);
+        let side_of = |p: DVec3, q: &[f64]| q[0] * p.x + q[1] * p.y + q[2] * p.z - q[3];
+        let side = planes
+            .chunks_exact(4)
+            .map(|q| side_of(c, q))
+            .fold(f64::NEG_INFINITY, f64::max);
+        if side <= 0.0 {
+            return Some(Some((0.0, true)));
+        }
+        if side <= eps {
+            return None;
+        }
+        // Slack for the rounding of distances computed two ways.
+        let slack = eps + r * 1e-9;
+        if side > r + slack {
+            return Some(None);
+        }
+        // A foot counts as on its face when no other plane has it in front by more
+        // than a thousandth of the surface tolerance.
+        let on_face = eps * 1e-3;
+        let mut foot_distance = None;
+        for (k, q) in planes.chunks_exact(4).enumerate() {
+            let pd = side_of(c, q);
+            if pd <= 0.0 {
+                continue;
+            }
+            let foot = c - DVec3::new(q[0], q[1], q[2]) * pd;
+            let behind_all = planes
+                .chunks_exact(4)
+                .enumerate()
+                .all(|(j, o)| j == k || side_of(foot, o) <= on_face);
+            if behind_all {
+                foot_distance = Some(pd);
+                break;
+            }
+        }
+        let d = match foot_distance {
+            Some(d) => d,
+            None => {
+                let point = |i: u16| {
+                    let i = 3 * i as usize;
+                    DVec3::new(points[i], points[i + 1], points[i + 2])
+                };
+                let edges = &self.edges[h.edges_at as usize..][..h.edges as usize];
+                edges
+                    .iter()
+                    .map(|&[a, b]| segment_closest(c, point(a), point(b)).0)
+                    .fold(f64::INFINITY, f64::min)
+                    .sqrt()
+            }
+        };
+        if d < r - slack {
+            Some(Some((d, false)))
+        } else if d > r + slack {
+            Some(None)
+        } else {
+            None
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use glam::{DQuat, DVec2};
+
+    use super::*;
+    use crate::model::Serials;
+    use crate::model::solids::{box_solid, lamina, mktetra, prism_solid};
+    use crate::spatial::query::Detail;
+    use crate::spatial::reach::{self, Features};
+
+    fn shape(body: crate::model::Body) -> BodyShape {
+        BodyShape::build(Arc::new(body))
+    }
+
+    #[test]
+    fn only_solid_convex_bodies_get_records() {
+        let mut s = Serials::new();
+        let pose = Pose::IDENTITY;
+        let mut hulls = Hulls::default();
+        let cube = shape(box_solid(&mut s, DVec3::new(2.0, 3.0, 4.0)).expect("a box"));
+        let tetra = shape(mktetra(&mut s, 1.0).expect("a tetrahedron"));
+        assert!(hulls.add(&cube, &pose).is_some());
+        assert!(hulls.add(&tetra, &pose).is_some());
+        let l = [
+            (0.0, 0.0),
+            (2.0, 0.0),
+            (2.0, 1.0),
+            (1.0, 1.0),
+            (1.0, 2.0),
+            (0.0, 2.0),
+        ]
+        .map(|(x, y)| DVec2::new(x, y));
+        let l_prism = shape(prism_solid(&mut s, &l, 1.0).expect("an L prism"));
+        assert!(!l_prism.convex && hulls.add(&l_prism, &pose).is_none());
+        // Flat: every vertex on both faces' planes, no volume.
+        let flat = shape(lamina(&mut s, &l[..3], 0.0).expect("a lamina").body);
+        assert!(!flat.convex && hulls.add(&flat, &pose).is_none());
+    }
+
+    /// The record's answers against the general walk, around a turned, moved box and a
+    /// tetrahedron: inside, in front of faces, beside edges and beyond vertices.
+    #[test]
+    fn records_answer_as_the_general_walk_does() {
+        let mut s = Serials::new();
+        let pose = Pose::new(
+            DVec3::new(3.0, -1.0, 2.0),
+            DQuat::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 1.1),
+        )
+        .expect("a pose");
+        let inverse = pose.inverse();
+        let mut hulls = Hulls::default();
+        let mut decided = 0;
+        for body in [
+            box_solid(&mut s, DVec3::new(2.0, 3.0, 4.0)).expect("a box"),
+            mktetra(&mut s, 1.5).expect("a tetrahedron"),
+        ] {
+            let shape = shape(body);
+            let h = hulls.add(&shape, &pose).expect("a record");
+            let mut seed = 17u64;
+            let mut next = || {
+                seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+                (seed >> 11) as f64 / (1u64 << 53) as f64
+            };
+            for _ in 0..2000 {
+                let c = pose.transform_point(DVec3::new(
+                    next() * 10.0 - 5.0,
+                    next() * 10.0 - 5.0,
+                    next() * 10.0 - 5.0,
+                ));
+                let r = next() * 4.0;
+                let general = reach::ball(
+                    &shape,
+                    &pose,
+                    inverse.transform_point(c),
+                    r,
+                    Detail::Bodies,
+                    0.0,
+                    &mut Features::default(),
+                );
+                let Some(fast) = hulls.ball(h, c, r) else {
+                    continue;
+                };
+                decided += 1;
+                match (fast, general) {
+                    (None, None) => {}
+                    (Some((d, i)), Some((dg, ig))) => {
+                        assert_eq!(i, ig, "inside at {c}");
+                        assert!((d - dg).abs() <= 1e-12 * (1.0 + dg), "{d} vs {dg} at {c}");
+                    }
+                    other => panic!("{other:?} at {c} r {r}"),
+                }
+            }
+        }
+        assert!(decided > 3900, "only {decided} answers decided");
+    }
+
+    #[test]
+    fn a_moved_record_follows_its_body() {
+        let mut s = Serials::new();
+        let cube = shape(box_solid(&mut s, DVec3::splat(2.0)).expect("a box"));
+        let mut hulls = Hulls::default();
+        let h = hulls.add(&cube, &Pose::IDENTITY).expect("a record");
+        let far = DVec3::new(10.0, 0.0, 0.0);
+        assert_eq!(hulls.ball(h, far, 1.0), Some(None));
+        hulls.pose(h, &cube, &Pose::from_translation(far));
+        assert_eq!(hulls.ball(h, far, 1.0), Some(Some((0.0, true))));
+        // Beside the moved box's edge x = 11, y = 1: √2 away from (12, 2, 0).
+        let (d, inside) = hulls
+            .ball(h, DVec3::new(12.0, 2.0, 0.0), 2.0)
+            .expect("decided")
+            .expect("met");
+        assert!(!inside && (d - 2f64.sqrt()).abs() < 1e-12);
+        assert_eq!(hulls.garbage(), 0);
+        hulls.release(h);
+        assert_eq!(hulls.garbage(), hulls.size());
+    }
+}
