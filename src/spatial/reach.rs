@@ -62,7 +62,13 @@ pub fn ball(
     let r2 = r * r;
     let features = detail != Detail::Bodies;
     let mut nearest: Option<Closest> = None;
-    shape.bvh.within(c, cull_radius2(r), |k| {
+    let cull2 = cull_radius2(r);
+    shape.bvh.within(c, cull2, |k| {
+        // A face farther than the ball (beyond rounding) has no side entering it.
+        let closest = shape.closest_on_face(k, c);
+        if closest.d2 > cull2 {
+            return;
+        }
         let cs = shape.corners_of(k);
         let mut meets = false;
         for (i, corner) in cs.iter().enumerate() {
@@ -85,7 +91,6 @@ pub fn ball(
                 );
             }
         }
-        let closest = shape.closest_on_face(k, c);
         meets |= closest.interior && closest.d2 <= r2;
         if !meets {
             return;
