@@ -96,6 +96,12 @@ impl Hulls {
         }
     }
 
+    /// Gives back spare capacity (after a body-by-body build).
+    pub fn shrink_to_fit(&mut self) {
+        self.data.shrink_to_fit();
+        self.edges.shrink_to_fit();
+    }
+
     /// Drops record `h` (it becomes garbage).
     pub fn release(&mut self, h: HullRef) {
         self.garbage += h.len() + h.edges as usize;

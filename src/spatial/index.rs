@@ -316,6 +316,7 @@ impl Spatial {
         for e in &mut self.entries {
             e.hull = self.hulls.add(&e.shape, &e.pose);
         }
+        self.hulls.shrink_to_fit();
         self.by_id = self
             .entries
             .iter()
