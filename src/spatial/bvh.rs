@@ -20,6 +20,8 @@ const LEAF_MAX: usize = 4;
 pub const LEAF_LIMIT: usize = 2 * LEAF_MAX;
 /// SAH bins per axis.
 const BINS: usize = 12;
+/// Primitives under a node above which its two subtrees are built in parallel.
+const PARALLEL_MIN: usize = 1 << 15;
 
 /// One node: its box and either two children (at `first` and `first + 1`) or a range
 /// of primitives (`first .. first + count`).
@@ -149,7 +151,7 @@ impl Bvh {
             first: 0,
             count: 0,
         });
-        split(&mut nodes, 0, &mut items, 0);
+        split_parallel(&mut nodes, 0, &mut items, 0);
         Bvh {
             nodes,
             order: items.into_iter().map(|it| it.index).collect(),
@@ -382,6 +384,19 @@ impl Ord for Near {
 /// Fills node `at` over `items` (which start at leaf position `offset`) and its
 /// subtree, splitting by binned SAH.
 fn split(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) {
+    if let Some(mid) = divide(nodes, at, items, offset) {
+        let first = nodes[at].first as usize;
+        let (left, right) = items.split_at_mut(mid);
+        split(nodes, first, left, offset);
+        split(nodes, first + 1, right, offset + mid);
+    }
+}
+
+/// Gives node `at` its box over `items` (which start at leaf position `offset`) and
+/// either makes it a leaf (answering `None`) or partitions `items` by binned SAH, pushes
+/// its two children (blank, adjacent, at `nodes[at].first`) and answers where the right
+/// child's items start.
+fn divide(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) -> Option<usize> {
     let mut bounds = Aabb::EMPTY;
     let mut cbounds = Aabb::EMPTY;
     for it in items.iter() {
@@ -396,7 +411,7 @@ fn split(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) {
     };
     if items.len() <= LEAF_MAX {
         leaf(nodes);
-        return;
+        return None;
     }
     let extent = cbounds.max - cbounds.min;
     let axis = if extent.x >= extent.y && extent.x >= extent.z {
@@ -416,7 +431,7 @@ fn split(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) {
         None if items.len() <= LEAF_LIMIT && extent[axis] <= 0.0 => {
             // Coincident centroids in a small set: a leaf (a little over the limit).
             leaf(nodes);
-            return;
+            return None;
         }
         None => {
             // No split pays off by SAH, but the leaf is too big: split at the median.
@@ -431,9 +446,56 @@ fn split(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) {
     nodes.push(blank);
     nodes[at].first = first as u32;
     nodes[at].count = 0;
+    Some(mid)
+}
+
+/// [`split`], with the two subtrees of a large node built at once on rayon's threads
+/// (each into its own node list, spliced in afterwards). The hierarchy is the same as
+/// [`split`] builds, node for node, up to the order of the nodes in memory.
+fn split_parallel(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) {
+    if items.len() <= PARALLEL_MIN {
+        split(nodes, at, items, offset);
+        return;
+    }
+    // Split this node alone: its children are made, then filled below.
+    let mut top = vec![nodes[at]];
+    let mid = match divide(&mut top, 0, items, offset) {
+        Some(mid) => mid,
+        None => {
+            nodes[at] = top[0];
+            return;
+        }
+    };
     let (left, right) = items.split_at_mut(mid);
-    split(nodes, first, left, offset);
-    split(nodes, first + 1, right, offset + mid);
+    let blank = top[1];
+    let build = |items: &mut [Item], offset: usize| {
+        let mut sub = vec![blank];
+        split_parallel(&mut sub, 0, items, offset);
+        sub
+    };
+    let (l, r) = rayon::join(|| build(left, offset), || build(right, offset + mid));
+    // Children adjacent at `first`, then the rest of each subtree after them.
+    let first = nodes.len();
+    let l_base = first + 2;
+    let r_base = l_base + l.len() - 1;
+    let l = relocated(l, l_base);
+    let r = relocated(r, r_base);
+    nodes[at] = top[0];
+    nodes[at].first = first as u32;
+    nodes.push(l[0]);
+    nodes.push(r[0]);
+    nodes.extend_from_slice(&l[1..]);
+    nodes.extend_from_slice(&r[1..]);
+}
+
+/// A subtree built on its own (root at 0) with its child links moved to where it is
+/// spliced in: its node `i > 0` at `base + i − 1` (no link leads to its root, which the
+/// caller places beside its sibling).
+fn relocated(mut sub: Vec<Node>, base: usize) -> Vec<Node> {
+    for n in sub.iter_mut().filter(|n| !n.is_leaf()) {
+        n.first = (base + n.first as usize - 1) as u32;
+    }
+    sub
 }
 
 /// The SAH split of `items` along `axis`: partitions them and answers the split point,
@@ -502,6 +564,60 @@ mod tests {
                 Aabb::new(c - h, c + h)
             })
             .collect()
+    }
+
+    /// The hierarchy [`split`] builds on one thread.
+    fn sequential(bs: &[Aabb]) -> Bvh {
+        let mut items: Vec<Item> = bs
+            .iter()
+            .enumerate()
+            .map(|(i, b)| Item {
+                bounds: *b,
+                centroid: b.center(),
+                index: i as u32,
+            })
+            .collect();
+        let mut nodes = vec![Node {
+            min: [0.0; 3],
+            max: [0.0; 3],
+            first: 0,
+            count: 0,
+        }];
+        split(&mut nodes, 0, &mut items, 0);
+        Bvh {
+            nodes,
+            order: items.into_iter().map(|it| it.index).collect(),
+        }
+    }
+
+    /// Whether the subtrees at `i` of `a` and `j` of `b` are the same, node for node.
+    fn same_tree(a: &Bvh, i: usize, b: &Bvh, j: usize) -> bool {
+        let (m, n) = (a.nodes[i], b.nodes[j]);
+        if m.min != n.min || m.max != n.max || m.count != n.count {
+            return false;
+        }
+        if m.is_leaf() {
+            return m.first == n.first;
+        }
+        let (ma, nb) = (m.first as usize, n.first as usize);
+        same_tree(a, ma, b, nb) && same_tree(a, ma + 1, b, nb + 1)
+    }
+
+    #[test]
+    fn the_parallel_build_makes_the_sequential_hierarchy() {
+        let bs = boxes(5 * PARALLEL_MIN);
+        let parallel = Bvh::build(&bs);
+        let one = sequential(&bs);
+        assert_eq!(parallel.order, one.order);
+        assert_eq!(parallel.nodes.len(), one.nodes.len());
+        assert!(same_tree(&parallel, 0, &one, 0));
+        // Every link stays inside the node list, and children sit inside their parent.
+        for n in parallel.nodes.iter().filter(|n| !n.is_leaf()) {
+            for c in [n.first as usize, n.first as usize + 1] {
+                let c = parallel.nodes[c];
+                assert!((0..3).all(|k| n.min[k] <= c.min[k] && c.max[k] <= n.max[k]));
+            }
+        }
     }
 
     #[test]

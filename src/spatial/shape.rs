@@ -17,7 +17,9 @@ use glam::DVec3;
 use super::aabb::Aabb;
 use super::bvh::Bvh;
 use super::exact::{boundary_margin, drop_axis, in_polygon, segment_closest};
-use crate::model::{Body, EdgeUse, Side};
+use rayon::prelude::*;
+
+use crate::model::{Body, EdgeUse, FaceId, Side};
 
 /// No edge: the corner of an edgeless face (a seminal body's).
 pub const NO_EDGE: u32 = u32::MAX;
@@ -25,6 +27,8 @@ pub const NO_EDGE: u32 = u32::MAX;
 pub const REPORT_EDGE: u8 = 1;
 /// Corner flag: this corner reports its starting vertex.
 pub const REPORT_VERTEX: u8 = 2;
+/// Faces laid out per task when a large body's shape is built in parallel.
+const PARALLEL_FACES: usize = 1 << 14;
 /// The most faces a body may have for its convexity to be checked and used: the
 /// check costs faces × vertices, and the convex tests visit every face.
 pub const CONVEX_MAX_FACES: usize = 64;
@@ -120,60 +124,84 @@ impl BodyShape {
             let v = b.origin(u);
             b.vertex_first_use(v) == Some(u)
         };
-        let mut faces = Vec::with_capacity(b.face_count());
-        let mut corners = Vec::with_capacity(2 * b.edge_count() + 1);
-        let mut boxes = Vec::with_capacity(b.face_count());
         let lone: Vec<u32> = b
             .vertices()
             .filter(|&v| b.vertex(v).ped.is_none())
             .map(|v| vix[v.index()])
             .collect();
-        for f in b.faces() {
-            let start = corners.len() as u32;
-            for u in b.face_uses(f) {
-                let mut flags = 0;
-                if u.side == Side::N {
-                    flags |= REPORT_EDGE;
-                }
-                if canonical_vertex_use(u) {
-                    flags |= REPORT_VERTEX;
-                }
-                corners.push(Corner {
-                    vertex: vix[b.origin(u).index()],
-                    edge: eix[u.edge.index()],
-                    flags,
-                });
-            }
-            if corners.len() as u32 == start {
-                // An edgeless face (a seminal body): its polygon is the lone vertex.
-                if let Some(&v) = lone.first() {
+        // Faces, their corners (`start` counted from the first face given) and boxes.
+        let lay = |ids: &[FaceId]| {
+            let mut faces = Vec::with_capacity(ids.len());
+            let mut corners = Vec::with_capacity(4 * ids.len());
+            let mut boxes = Vec::with_capacity(ids.len());
+            for &f in ids {
+                let start = corners.len() as u32;
+                for u in b.face_uses(f) {
+                    let mut flags = 0;
+                    if u.side == Side::N {
+                        flags |= REPORT_EDGE;
+                    }
+                    if canonical_vertex_use(u) {
+                        flags |= REPORT_VERTEX;
+                    }
                     corners.push(Corner {
-                        vertex: v,
-                        edge: NO_EDGE,
-                        flags: REPORT_VERTEX,
+                        vertex: vix[b.origin(u).index()],
+                        edge: eix[u.edge.index()],
+                        flags,
                     });
                 }
+                if corners.len() as u32 == start {
+                    // An edgeless face (a seminal body): its polygon is the lone vertex.
+                    if let Some(&v) = lone.first() {
+                        corners.push(Corner {
+                            vertex: v,
+                            edge: NO_EDGE,
+                            flags: REPORT_VERTEX,
+                        });
+                    }
+                }
+                let len = corners.len() as u32 - start;
+                let (normal, offset) = match b.face_plane(f) {
+                    Some(p) => (p.normal, p.offset),
+                    None => (DVec3::ZERO, 0.0),
+                };
+                let (i, j) = drop_axis(normal);
+                boxes.push(Aabb::of_points(
+                    corners[start as usize..]
+                        .iter()
+                        .map(|c| points[c.vertex as usize]),
+                ));
+                faces.push(FaceRec {
+                    normal,
+                    offset,
+                    axes: (i as u8, j as u8),
+                    start,
+                    len,
+                    serial: b.face_serial(f).get(),
+                });
             }
-            let len = corners.len() as u32 - start;
-            let (normal, offset) = match b.face_plane(f) {
-                Some(p) => (p.normal, p.offset),
-                None => (DVec3::ZERO, 0.0),
-            };
-            let (i, j) = drop_axis(normal);
-            boxes.push(Aabb::of_points(
-                corners[start as usize..]
-                    .iter()
-                    .map(|c| points[c.vertex as usize]),
-            ));
-            faces.push(FaceRec {
-                normal,
-                offset,
-                axes: (i as u8, j as u8),
-                start,
-                len,
-                serial: b.face_serial(f).get(),
-            });
-        }
+            (faces, corners, boxes)
+        };
+        let ids: Vec<FaceId> = b.faces().collect();
+        let (faces, corners, boxes) = if ids.len() <= PARALLEL_FACES {
+            lay(&ids)
+        } else {
+            // In chunks on rayon's threads, then joined with the corner starts moved on.
+            let parts: Vec<_> = ids.par_chunks(PARALLEL_FACES).map(lay).collect();
+            let mut faces = Vec::with_capacity(ids.len());
+            let mut corners = Vec::with_capacity(parts.iter().map(|p| p.1.len()).sum());
+            let mut boxes = Vec::with_capacity(ids.len());
+            for (f, c, bx) in parts {
+                let base = corners.len() as u32;
+                faces.extend(f.into_iter().map(|f| FaceRec {
+                    start: f.start + base,
+                    ..f
+                }));
+                corners.extend_from_slice(&c);
+                boxes.extend_from_slice(&bx);
+            }
+            (faces, corners, boxes)
+        };
         let bvh = Bvh::build(&boxes);
         // Lay faces and their corners out in leaf order.
         let mut ordered = Vec::with_capacity(faces.len());
@@ -424,3 +452,39 @@ const PROBES: [[f64; 3]; 6] = [
     [0.852_395_851_1, 0.123_456_789_1, -0.508_295_867_4],
     [-0.231_049_060_2, 0.105_360_515_7, -0.967_078_543_2],
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Serial;
+    use crate::model::Serials;
+    use crate::model::solids::sphere;
+
+    /// A body large enough to be laid out in parallel chunks keeps every face's plane and
+    /// perimeter, in the body's own order, whichever chunk the face fell in.
+    #[test]
+    fn a_large_shape_lays_out_every_face_as_the_body_has_it() {
+        let body = sphere(&mut Serials::new(), 3.0, 400, 100).expect("a sphere");
+        assert!(body.face_count() > 2 * PARALLEL_FACES);
+        let shape = BodyShape::build(Arc::new(body));
+        let b = shape.body().clone();
+        assert_eq!(shape.faces.len(), b.face_count());
+        let mut seen = std::collections::HashSet::new();
+        for (k, rec) in shape.faces.iter().enumerate() {
+            assert!(seen.insert(rec.serial), "face {} twice", rec.serial);
+            let f = b.face_by_serial(Serial(rec.serial)).expect("a face");
+            let want: Vec<DVec3> = b.face_uses(f).map(|u| b.position(b.origin(u))).collect();
+            let got: Vec<DVec3> = shape.loop_points(k).collect();
+            assert_eq!(got, want, "face {}", rec.serial);
+            let plane = b.face_plane(f).expect("a plane");
+            assert_eq!((rec.normal, rec.offset), (plane.normal, plane.offset));
+        }
+        // And the hierarchy's boxes hold their faces.
+        let mut visited = 0;
+        shape.bvh.within(DVec3::ZERO, 100.0, |k| {
+            visited += 1;
+            assert!(shape.loop_points(k).all(|p| shape.bounds.contains_point(p)));
+        });
+        assert_eq!(visited, shape.faces.len());
+    }
+}
