@@ -6,9 +6,9 @@
 //!
 //! * [`p3p`]: the minimal solver, Lambda Twist P3P (Persson & Nordberg, ECCV 2018): all
 //!   poses (at most four) that put three world points exactly on three viewing rays.
-//! * `refine_pose`: Levenberg–Marquardt refinement of a pose over N ≥ 3 correspondences,
-//!   minimising a robust loss of the reprojection error in normalised image
-//!   coordinates.
+//! * [`refine_pose`]: Levenberg–Marquardt refinement of a pose over N ≥ 3 correspondences,
+//!   minimising a robust loss ([`Loss`]) of the reprojection error in
+//!   normalised image coordinates.
 //!
 //! # Convention
 //!
@@ -27,8 +27,10 @@
 //! inside only for the decompositions and solves glam does not have.
 
 mod p3p;
+mod refine;
 
 pub use p3p::{MAX_P3P_SOLUTIONS, p3p};
+pub use refine::{Loss, MIN_POINTS, RESIDUAL_CAP, RefineOptions, Refined, refine_pose};
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
 
