@@ -4,7 +4,7 @@
 //! in which a calibrated camera sees them, this module finds the camera's rotation and
 //! translation. It is pure, synchronous numerics with no I/O:
 //!
-//! * [`p3p`]: the minimal solver, Lambda Twist P3P (Persson & Nordberg, ECCV 2018): all
+//! * [`p3p()`]: the minimal solver, Lambda Twist P3P (Persson & Nordberg, ECCV 2018): all
 //!   poses (at most four) that put three world points exactly on three viewing rays.
 //! * [`refine_pose`]: Levenberg–Marquardt refinement of a pose over N ≥ 3 correspondences,
 //!   minimising a robust loss ([`Loss`]) of the reprojection error in
@@ -26,8 +26,8 @@
 //! The interface uses glam's `f64` types like the rest of the crate; nalgebra is used
 //! inside only for the decompositions and solves glam does not have.
 
-mod p3p;
-mod refine;
+pub mod p3p;
+pub mod refine;
 
 pub use p3p::{MAX_P3P_SOLUTIONS, p3p};
 pub use refine::{Loss, MIN_POINTS, RESIDUAL_CAP, RefineOptions, Refined, refine_pose};

@@ -56,7 +56,7 @@ const REFINE_STEPS: usize = 5;
 ///
 /// * [`SolveError::NonFinite`] when any coordinate is NaN or infinite.
 /// * [`SolveError::Degenerate`] with [`Degeneracy::ParallelBearings`] when a bearing is zero
-///   or two are parallel, [`Degeneracy::CoincidentPoints`] when two world points coincide,
+///   or two point the same way (within 1e-10 rad), [`Degeneracy::CoincidentPoints`] when two world points coincide,
 ///   [`Degeneracy::CollinearPoints`] when the three lie on a line (see the tolerances
 ///   above: relative to the triangle's size, about 1e-9).
 pub fn p3p(bearings: &[DVec3; 3], world: &[DVec3; 3]) -> Result<Vec<CvPose>, SolveError> {
@@ -193,8 +193,8 @@ impl Quadrics {
         symmetric([0.0, 1.0, 1.0], [0.0, 0.0, -self.b23])
     }
 
-    /// Depth triples (unrefined, up to sign conventions already fixed: every entry
-    /// positive) that satisfy the three quadrics, at most four.
+    /// Depth triples, every entry positive, that satisfy the three quadrics up to rounding
+    /// (before refinement); at most four.
     fn depth_candidates(&self) -> Vec<DVec3> {
         let mut out = Vec::with_capacity(MAX_P3P_SOLUTIONS);
         let d1 = self.a23 * self.m12() - self.a12 * self.m23();
