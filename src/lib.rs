@@ -9,6 +9,7 @@ pub mod camera;
 pub mod model;
 pub mod render;
 pub mod server;
+pub mod solve;
 pub mod spatial;
 pub mod store;
 
