@@ -6,7 +6,9 @@
 //! [`Spatial`] indexes one world revision: a hierarchy over each body's faces in the
 //! body's own frame ([`shape`]) and a hierarchy over the bodies' world bounds
 //! ([`index`]). Moving a body refits one path of the top hierarchy; editing a body's
-//! geometry rebuilds that body's shape only. Every answer comes from exact tests
+//! geometry rebuilds that body's shape only. Small convex bodies also keep flat
+//! world-frame records (the `hull` module) that answer the sphere query at `bodies` detail without
+//! reading their shapes. Every answer comes from exact tests
 //! ([`exact`]) on the candidates the hierarchies leave, in world coordinates, and
 //! carries the revision it was computed at.
 //!
