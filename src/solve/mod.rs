@@ -9,6 +9,9 @@
 //! * [`refine_pose`]: Levenberg–Marquardt refinement of a pose over N ≥ 3 correspondences,
 //!   minimising a robust loss ([`Loss`]) of the reprojection error in
 //!   normalised image coordinates.
+//! * [`ransac_pnp`]: LO-RANSAC around P3P with adaptive stopping, for N ≥ 4
+//!   correspondences of which many may be wrong: the pose with the largest consensus and
+//!   its inliers, or [`SolveError::NoConsensus`].
 //!
 //! # Convention
 //!
@@ -27,9 +30,11 @@
 //! inside only for the decompositions and solves glam does not have.
 
 pub mod p3p;
+pub mod ransac;
 pub mod refine;
 
 pub use p3p::{MAX_P3P_SOLUTIONS, p3p};
+pub use ransac::{Consensus, LocalOptimisation, MIN_CONSENSUS, RansacOptions, ransac_pnp};
 pub use refine::{Loss, MIN_POINTS, RESIDUAL_CAP, RefineOptions, Refined, refine_pose};
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
@@ -102,6 +107,15 @@ pub enum SolveError {
         what: &'static str,
         /// Its value.
         value: f64,
+    },
+    /// No pose agreed with enough correspondences: too many are wrong, or the inlier
+    /// threshold is too tight for the noise.
+    #[error("no camera agrees with enough correspondences (best {best_inliers}, needed {needed})")]
+    NoConsensus {
+        /// The largest consensus found (0 when no pose was found at all).
+        best_inliers: usize,
+        /// The consensus required.
+        needed: usize,
     },
     /// An iterative solve stopped without meeting its convergence test.
     #[error("the solve did not converge in {iterations} iterations")]
