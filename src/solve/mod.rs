@@ -12,6 +12,8 @@
 //! * [`ransac_pnp`]: LO-RANSAC around P3P with adaptive stopping, for N ≥ 4
 //!   correspondences of which many may be wrong: the pose with the largest consensus and
 //!   its inliers, or [`SolveError::NoConsensus`].
+//! * [`solve_pnp`]: the whole solve from pixels with known intrinsics: RANSAC, then
+//!   refinement on the consensus, the answer in pixels and in OpenCV's `rvec`/`tvec`.
 //!
 //! # Convention
 //!
@@ -30,10 +32,12 @@
 //! inside only for the decompositions and solves glam does not have.
 
 pub mod p3p;
+pub mod pnp;
 pub mod ransac;
 pub mod refine;
 
 pub use p3p::{MAX_P3P_SOLUTIONS, p3p};
+pub use pnp::{PixelIntrinsics, PnpOptions, PnpSolution, rotation_vector, solve_pnp};
 pub use ransac::{Consensus, LocalOptimisation, MIN_CONSENSUS, RansacOptions, ransac_pnp};
 pub use refine::{Loss, MIN_POINTS, RESIDUAL_CAP, RefineOptions, Refined, refine_pose};
 
