@@ -6,6 +6,10 @@
 //!
 //! * [`p3p()`]: the minimal solver, Lambda Twist P3P (Persson & Nordberg, ECCV 2018): all
 //!   poses (at most four) that put three world points exactly on three viewing rays.
+//! * [`sqpnp()`]: the global solver, SQPnP (Terzakis & Lourakis, ECCV 2020): the pose of
+//!   least (depth-weighted) squared reprojection error over N ≥ 3 correspondences, planar
+//!   or not, found by sequential quadratic programming on the rotations from starts that
+//!   provably include the global minimum.
 //! * [`refine_pose`]: Levenberg–Marquardt refinement of a pose over N ≥ 3 correspondences,
 //!   minimising a robust loss ([`Loss`]) of the reprojection error in
 //!   normalised image coordinates.
@@ -35,11 +39,13 @@ pub mod p3p;
 pub mod pnp;
 pub mod ransac;
 pub mod refine;
+pub mod sqpnp;
 
 pub use p3p::{MAX_P3P_SOLUTIONS, p3p};
 pub use pnp::{PixelIntrinsics, PnpOptions, PnpSolution, rotation_vector, solve_pnp};
 pub use ransac::{Consensus, LocalOptimisation, MIN_CONSENSUS, RansacOptions, ransac_pnp};
 pub use refine::{Loss, MIN_POINTS, RESIDUAL_CAP, RefineOptions, Refined, refine_pose};
+pub use sqpnp::{SqpnpMinimum, SqpnpSolution, sqpnp};
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
 
@@ -121,6 +127,10 @@ pub enum SolveError {
         /// The consensus required.
         needed: usize,
     },
+    /// No pose the solver found puts the points in front of the camera (the observations
+    /// are inconsistent with the world points).
+    #[error("no pose puts the points in front of the camera")]
+    NoPoseInFront,
     /// An iterative solve stopped without meeting its convergence test.
     #[error("the solve did not converge in {iterations} iterations")]
     DidNotConverge {
