@@ -1,13 +1,15 @@
 //! The camera from 2D–3D correspondences in pixels, start to finish: pixels to
 //! normalised coordinates with known intrinsics, LO-RANSAC around P3P for the consensus
-//! ([`ransac_pnp`]), then Levenberg–Marquardt with a robust loss on the consensus
-//! ([`refine_pose`]), the inliers counted again with the refined pose, and the answer in
-//! pixels and in OpenCV's `rvec`/`tvec`.
+//! ([`ransac_pnp`]), the global SQPnP solve on the consensus ([`sqpnp()`], kept when it
+//! reprojects the consensus better than RANSAC's camera), then Levenberg–Marquardt with a
+//! robust loss on the consensus ([`refine_pose`]), the inliers counted again with the
+//! refined pose, and the answer in pixels and in OpenCV's `rvec`/`tvec`.
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
 
 use super::ransac::{RansacOptions, ransac_pnp};
 use super::refine::{Loss, RefineOptions, refine_pose};
+use super::sqpnp::sqpnp;
 use super::{CvPose, SolveError};
 
 /// Pinhole intrinsics in OpenCV's convention: `u = fx·x/z + cx`, `v = fy·y/z + cy`, with
@@ -149,8 +151,25 @@ pub fn solve_pnp(
         .iter()
         .map(|&i| (world[i], observed[i]))
         .unzip();
+    // The global optimum of the consensus, when it fits it better than the sample's camera
+    // (a degenerate consensus leaves RANSAC's camera as it is).
+    let squared_error = |pose: &CvPose| -> f64 {
+        w.iter()
+            .zip(&m)
+            .map(|(&x, &o)| {
+                pose.project(x)
+                    .map_or(f64::INFINITY, |q| (q - o).length_squared())
+            })
+            .sum()
+    };
+    let start = match sqpnp(&w, &m, None) {
+        Ok(global) if squared_error(&global.best.pose) < squared_error(&consensus.pose) => {
+            global.best.pose
+        }
+        _ => consensus.pose,
+    };
     let refine = RefineOptions::new(Loss::Huber { scale: threshold });
-    let refined = refine_pose(&consensus.pose, &w, &m, &refine)?.require_converged()?;
+    let refined = refine_pose(&start, &w, &m, &refine)?.require_converged()?;
     let pose = refined.pose;
 
     // The inliers of the refined camera, and their error in pixels.
