@@ -40,6 +40,8 @@ pub mod pnp;
 pub mod ransac;
 pub mod refine;
 pub mod sqpnp;
+#[cfg(test)]
+mod testing;
 
 pub use p3p::{MAX_P3P_SOLUTIONS, p3p};
 pub use pnp::{PixelIntrinsics, PnpOptions, PnpSolution, rotation_vector, solve_pnp};

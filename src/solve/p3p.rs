@@ -469,51 +469,13 @@ fn null_directions(f: DVec3) -> Vec<DVec3> {
 mod tests {
     use super::*;
 
-    /// SplitMix64: a small deterministic random stream for the tests.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            let unit = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-            lo + (hi - lo) * unit
-        }
-
-        fn unit_vector(&mut self) -> DVec3 {
-            loop {
-                let v = DVec3::new(
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                );
-                let n = v.length();
-                if n > 0.1 && n <= 1.0 {
-                    return v / n;
-                }
-            }
-        }
-
-        fn rotation(&mut self) -> DMat3 {
-            let axis = self.unit_vector();
-            DMat3::from_axis_angle(
-                axis,
-                self.range(-std::f64::consts::PI, std::f64::consts::PI),
-            )
-        }
-    }
+    use crate::solve::testing::Rng;
 
     /// A random pose and three points in front of it (camera frame in [-2,2]²×[2,8]),
     /// returned as (pose, bearings, world points).
     fn random_problem(rng: &mut Rng) -> (CvPose, [DVec3; 3], [DVec3; 3]) {
         let pose = CvPose::new(
-            rng.rotation(),
+            rng.axis_angle_rotation(),
             DVec3::new(
                 rng.range(-3.0, 3.0),
                 rng.range(-3.0, 3.0),

@@ -393,43 +393,7 @@ impl Problem<'_> {
 mod tests {
     use super::*;
 
-    /// SplitMix64 with Box–Muller normals: a small deterministic random stream.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            let unit = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-            lo + (hi - lo) * unit
-        }
-
-        fn normal(&mut self) -> f64 {
-            let u1 = self.range(f64::MIN_POSITIVE, 1.0);
-            let u2 = self.range(0.0, 1.0);
-            (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-        }
-
-        fn unit_vector(&mut self) -> DVec3 {
-            loop {
-                let v = DVec3::new(
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                );
-                let n = v.length();
-                if n > 0.1 && n <= 1.0 {
-                    return v / n;
-                }
-            }
-        }
-    }
+    use crate::solve::testing::Rng;
 
     const F: f64 = 800.0;
 

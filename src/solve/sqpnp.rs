@@ -601,58 +601,7 @@ mod tests {
     use super::super::{Loss, RefineOptions, refine_pose};
     use super::*;
 
-    /// SplitMix64 with Box–Muller normals: a small deterministic random stream.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            let unit = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-            lo + (hi - lo) * unit
-        }
-
-        fn normal(&mut self) -> f64 {
-            let u1 = self.range(f64::MIN_POSITIVE, 1.0);
-            let u2 = self.range(0.0, 1.0);
-            (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-        }
-
-        fn unit_vector(&mut self) -> DVec3 {
-            loop {
-                let v = DVec3::new(
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                );
-                let n = v.length();
-                if n > 0.1 && n <= 1.0 {
-                    return v / n;
-                }
-            }
-        }
-
-        /// A uniformly random rotation (a random unit quaternion).
-        fn rotation(&mut self) -> DMat3 {
-            loop {
-                let q = glam::DQuat::from_xyzw(
-                    self.normal(),
-                    self.normal(),
-                    self.normal(),
-                    self.normal(),
-                );
-                if q.length() > 1e-3 {
-                    return DMat3::from_quat(q.normalize());
-                }
-            }
-        }
-    }
+    use crate::solve::testing::Rng;
 
     const F: f64 = 800.0;
 
@@ -660,7 +609,7 @@ mod tests {
     /// uniform in [-2,2]²×[4,8] in the camera frame, observed with `noise_px` Gaussian pixel
     /// noise at f = 800.
     fn scene(rng: &mut Rng, n: usize, noise_px: f64) -> (CvPose, Vec<DVec3>, Vec<DVec2>) {
-        let rotation = rng.rotation();
+        let rotation = rng.uniform_rotation();
         let truth = CvPose::new(
             rotation,
             DVec3::new(
@@ -991,7 +940,7 @@ mod tests {
     #[test]
     fn sqpnp_refuses_degenerate_configurations() {
         let mut rng = Rng(19);
-        let truth = CvPose::new(rng.rotation(), DVec3::new(0.3, -0.2, 6.0));
+        let truth = CvPose::new(rng.uniform_rotation(), DVec3::new(0.3, -0.2, 6.0));
         let project = |x: DVec3| {
             let p = truth.transform(x);
             DVec2::new(p.x / p.z, p.y / p.z)
