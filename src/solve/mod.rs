@@ -141,6 +141,29 @@ pub enum SolveError {
     },
 }
 
+/// Checks correspondences `world[i] ↔ observed[i]`: as many observations as world
+/// points ([`SolveError::LengthMismatch`]) and every number finite
+/// ([`SolveError::NonFinite`]).
+pub(crate) fn check_pairs(world: &[DVec3], observed: &[DVec2]) -> Result<(), SolveError> {
+    if world.len() != observed.len() {
+        return Err(SolveError::LengthMismatch {
+            points: world.len(),
+            observations: observed.len(),
+        });
+    }
+    if world.iter().any(|x| !x.is_finite()) {
+        return Err(SolveError::NonFinite {
+            what: "world points",
+        });
+    }
+    if observed.iter().any(|m| !m.is_finite()) {
+        return Err(SolveError::NonFinite {
+            what: "observations",
+        });
+    }
+    Ok(())
+}
+
 /// A camera pose in OpenCV's convention: `x_cam = rotation·x_world + translation`.
 ///
 /// A pose produced by this module has a proper rotation (orthonormal to within

@@ -41,7 +41,7 @@ use glam::{DVec2, DVec3};
 
 use super::p3p::p3p;
 use super::refine::{Loss, RefineOptions, refine_pose};
-use super::{CvPose, Degeneracy, SolveError};
+use super::{CvPose, Degeneracy, SolveError, check_pairs};
 
 /// The fewest correspondences [`ransac_pnp`] accepts, and the smallest consensus it will
 /// report: three determine (up to four) poses, the fourth is the first that checks them.
@@ -194,27 +194,12 @@ pub fn ransac_pnp(
     observed: &[DVec2],
     options: &RansacOptions,
 ) -> Result<Consensus, SolveError> {
-    if world.len() != observed.len() {
-        return Err(SolveError::LengthMismatch {
-            points: world.len(),
-            observations: observed.len(),
-        });
-    }
+    check_pairs(world, observed)?;
     let n = world.len();
     if n < MIN_CONSENSUS {
         return Err(SolveError::TooFewPoints {
             needed: MIN_CONSENSUS,
             got: n,
-        });
-    }
-    if world.iter().any(|x| !x.is_finite()) {
-        return Err(SolveError::NonFinite {
-            what: "world points",
-        });
-    }
-    if observed.iter().any(|m| !m.is_finite()) {
-        return Err(SolveError::NonFinite {
-            what: "observations",
         });
     }
     options.validate()?;

@@ -31,7 +31,7 @@
 use glam::{DMat3, DQuat, DVec2, DVec3};
 use nalgebra::{Matrix6, Vector6};
 
-use super::{CvPose, SolveError};
+use super::{CvPose, SolveError, check_pairs};
 
 /// The fewest correspondences [`refine_pose`] accepts (six unknowns, two equations each).
 pub const MIN_POINTS: usize = 3;
@@ -197,26 +197,11 @@ pub fn refine_pose(
     observed: &[DVec2],
     options: &RefineOptions,
 ) -> Result<Refined, SolveError> {
-    if world.len() != observed.len() {
-        return Err(SolveError::LengthMismatch {
-            points: world.len(),
-            observations: observed.len(),
-        });
-    }
+    check_pairs(world, observed)?;
     if world.len() < MIN_POINTS {
         return Err(SolveError::TooFewPoints {
             needed: MIN_POINTS,
             got: world.len(),
-        });
-    }
-    if world.iter().any(|x| !x.is_finite()) {
-        return Err(SolveError::NonFinite {
-            what: "world points",
-        });
-    }
-    if observed.iter().any(|m| !m.is_finite()) {
-        return Err(SolveError::NonFinite {
-            what: "observations",
         });
     }
     initial.validate()?;

@@ -53,7 +53,7 @@
 use glam::{DMat3, DVec2, DVec3};
 use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3, Vector6};
 
-use super::{CvPose, Degeneracy, SolveError};
+use super::{CvPose, Degeneracy, SolveError, check_pairs};
 
 /// The fewest correspondences [`sqpnp()`] accepts (with positive weight).
 pub const MIN_POINTS: usize = 3;
@@ -155,12 +155,7 @@ pub fn sqpnp(
     observed: &[DVec2],
     weights: Option<&[f64]>,
 ) -> Result<SqpnpSolution, SolveError> {
-    if world.len() != observed.len() {
-        return Err(SolveError::LengthMismatch {
-            points: world.len(),
-            observations: observed.len(),
-        });
-    }
+    check_pairs(world, observed)?;
     if let Some(w) = weights {
         if w.len() != world.len() {
             return Err(SolveError::BadParameter {
@@ -181,16 +176,6 @@ pub fn sqpnp(
         return Err(SolveError::TooFewPoints {
             needed: MIN_POINTS,
             got: used,
-        });
-    }
-    if world.iter().any(|x| !x.is_finite()) {
-        return Err(SolveError::NonFinite {
-            what: "world points",
-        });
-    }
-    if observed.iter().any(|m| !m.is_finite()) {
-        return Err(SolveError::NonFinite {
-            what: "observations",
         });
     }
 
