@@ -474,14 +474,7 @@ mod tests {
     /// A random pose and three points in front of it (camera frame in [-2,2]²×[2,8]),
     /// returned as (pose, bearings, world points).
     fn random_problem(rng: &mut Rng) -> (CvPose, [DVec3; 3], [DVec3; 3]) {
-        let pose = CvPose::new(
-            rng.axis_angle_rotation(),
-            DVec3::new(
-                rng.range(-3.0, 3.0),
-                rng.range(-3.0, 3.0),
-                rng.range(-3.0, 3.0),
-            ),
-        );
+        let pose = CvPose::new(rng.axis_angle_rotation(), rng.vector(-3.0, 3.0));
         let cam = [(); 3].map(|_| {
             DVec3::new(
                 rng.range(-2.0, 2.0),

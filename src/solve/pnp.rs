@@ -237,11 +237,7 @@ mod tests {
     ) -> (CvPose, Vec<DVec3>, Vec<DVec2>) {
         let axis = DVec3::new(rng.normal(), rng.normal(), rng.normal()).normalize();
         let rotation = DMat3::from_quat(DQuat::from_axis_angle(axis, rng.range(0.0, 3.0)));
-        let translation = DVec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        );
+        let translation = rng.vector(-1.0, 1.0);
         let pose = CvPose::new(rotation, translation);
         let mut world = Vec::new();
         let mut pixels = Vec::new();

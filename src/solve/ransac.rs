@@ -502,14 +502,7 @@ mod tests {
     /// 640×480 image.
     fn scene(rng: &mut SceneRng, n: usize, noise_px: f64, outliers: f64) -> Scene {
         let rotation = DMat3::from_axis_angle(rng.unit_vector(), rng.range(-3.0, 3.0));
-        let truth = CvPose::new(
-            rotation,
-            DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            ),
-        );
+        let truth = CvPose::new(rotation, rng.vector(-1.0, 1.0));
         let wrong = (n as f64 * outliers).round() as usize;
         // A random choice of `wrong` indices (partial Fisher–Yates).
         let mut order: Vec<usize> = (0..n).collect();

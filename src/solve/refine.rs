@@ -398,14 +398,7 @@ mod tests {
             (2.0, 4.0, 8.0)
         };
         let rotation = DMat3::from_axis_angle(rng.unit_vector(), rng.range(-3.0, 3.0));
-        let truth = CvPose::new(
-            rotation,
-            DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            ),
-        );
+        let truth = CvPose::new(rotation, rng.vector(-1.0, 1.0));
         let mut world = Vec::with_capacity(n);
         let mut observed = Vec::with_capacity(n);
         let wrong = (n as f64 * outliers).round() as usize;

@@ -595,14 +595,7 @@ mod tests {
     /// noise at f = 800.
     fn scene(rng: &mut Rng, n: usize, noise_px: f64) -> (CvPose, Vec<DVec3>, Vec<DVec2>) {
         let rotation = rng.uniform_rotation();
-        let truth = CvPose::new(
-            rotation,
-            DVec3::new(
-                rng.range(-10.0, 10.0),
-                rng.range(-10.0, 10.0),
-                rng.range(-10.0, 10.0),
-            ),
-        );
+        let truth = CvPose::new(rotation, rng.vector(-10.0, 10.0));
         let mut world = Vec::with_capacity(n);
         let mut observed = Vec::with_capacity(n);
         for _ in 0..n {

@@ -22,6 +22,11 @@ impl Rng {
         lo + (hi - lo) * unit
     }
 
+    /// Each coordinate uniform in `[lo, hi)`, drawn x, y, z in turn.
+    pub(crate) fn vector(&mut self, lo: f64, hi: f64) -> DVec3 {
+        DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+    }
+
     /// Standard normal.
     pub(crate) fn normal(&mut self) -> f64 {
         let u1 = self.range(f64::MIN_POSITIVE, 1.0);
@@ -32,11 +37,7 @@ impl Rng {
     /// Uniform on the unit sphere.
     pub(crate) fn unit_vector(&mut self) -> DVec3 {
         loop {
-            let v = DVec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
+            let v = self.vector(-1.0, 1.0);
             let n = v.length();
             if n > 0.1 && n <= 1.0 {
                 return v / n;
