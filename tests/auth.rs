@@ -143,10 +143,12 @@ fn every_guarded_route_refuses_missing_and_too_weak_tokens() {
             "admin"
         } else if method == "GET"
             || template == "/v1/appearance"
+            || template == "/v1/camera-solution"
             || template.starts_with("/v1/spatial/")
         {
-            // POST /v1/appearance draws and POST /v1/spatial/* query; they change
-            // nothing and need only the read role.
+            // POST /v1/appearance draws, POST /v1/spatial/* query and POST
+            // /v1/camera-solution solves (storing needs write, checked below); they
+            // change nothing and need only the read role.
             "read"
         } else {
             "write"
@@ -256,4 +258,59 @@ fn each_role_does_what_it_may() {
         .status()
         .as_u16();
     assert_eq!(status, 401);
+}
+
+#[test]
+fn a_read_token_solves_cameras_but_only_a_write_token_stores_them() {
+    use winged::model::{Camera, Intrinsics};
+    let s = server();
+    let agent = s.agent();
+    let k = Intrinsics::new(640, 480, 500.0, 500.0, 320.0, 240.0).expect("intrinsics");
+    let eye = Camera::look_at(
+        glam::DVec3::new(3.0, -2.0, 2.0),
+        glam::DVec3::ZERO,
+        glam::DVec3::Z,
+        k,
+    )
+    .expect("a camera");
+    let correspondences: Vec<Value> = (0..12)
+        .map(|i| {
+            let p = glam::DVec3::new(
+                (i % 3) as f64 * 0.4 - 0.4,
+                (i / 3 % 2) as f64 * 0.5 - 0.25,
+                (i / 6) as f64 * 0.3 + (i % 2) as f64 * 0.1,
+            );
+            let px = eye.project(p).expect("in front");
+            json!({"pixel": px.to_array(), "point": p.to_array()})
+        })
+        .collect();
+    let solve = |token: &str, store: bool| {
+        let mut body = json!({
+            "intrinsics": {"width": 640, "height": 480, "fx": 500.0, "fy": 500.0, "cx": 320.0, "cy": 240.0},
+            "correspondences": correspondences,
+        });
+        if store {
+            body["store_as"] = json!("solved");
+        }
+        let mut res = agent
+            .post(&s.url("/v1/camera-solution"))
+            .header("Authorization", format!("Bearer {token}"))
+            .send_json(body)
+            .expect("the server answers");
+        let status = res.status().as_u16();
+        let text = res.body_mut().read_to_string().unwrap_or_default();
+        (status, text)
+    };
+    let before = revision(&s);
+    let (status, text) = solve(READ, false);
+    assert_eq!(status, 200, "{text}");
+    let (status, text) = solve(READ, true);
+    assert_eq!(status, 403, "{text}");
+    let p: Value = serde_json::from_str(&text).expect("problem JSON");
+    assert_eq!(p["type"], "urn:winged:problem:forbidden");
+    assert!(p["detail"].as_str().unwrap().contains("write"), "{p}");
+    assert_eq!(revision(&s), before, "nothing was stored");
+    let (status, text) = solve(WRITE, true);
+    assert_eq!(status, 200, "{text}");
+    assert_eq!(revision(&s), before + 1);
 }

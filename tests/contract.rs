@@ -505,9 +505,12 @@ impl Contract {
     }
 }
 
-/// Operations that use POST but only read.
+/// Operations that use POST but only read (`/v1/camera-solution` writes only with
+/// `store_as`, checked where it is tried).
 fn is_read(template: &str) -> bool {
-    template == "/v1/appearance" || template.starts_with("/v1/spatial/")
+    template == "/v1/appearance"
+        || template == "/v1/camera-solution"
+        || template.starts_with("/v1/spatial/")
 }
 
 fn matches_template(template: &str, path: &str) -> bool {
@@ -571,6 +574,7 @@ fn answers_match_the_contract() {
     cameras(&c);
     appearance(&c);
     spatial(&c);
+    camera_solution(&c);
     lights(&c);
     deletes(&c);
     following(&c, start);
@@ -1430,6 +1434,107 @@ fn appearance(c: &Contract) {
                                          "cx": 4, "cy": 4}}}),
         422,
         Spec::Either,
+    );
+}
+
+fn camera_solution(c: &Contract) {
+    let solve = "/v1/camera-solution";
+    let eye = c.ok("GET", "/v1/cameras/{name}", "/v1/cameras/eye", None);
+    let camera = winged::model::Camera::new(
+        winged::model::Pose {
+            position: glam::DVec3::new(
+                eye["pose"]["position"][0].as_f64().expect("x"),
+                eye["pose"]["position"][1].as_f64().expect("y"),
+                eye["pose"]["position"][2].as_f64().expect("z"),
+            ),
+            rotation: glam::DQuat::from_array(
+                [0, 1, 2, 3].map(|k| eye["pose"]["rotation"][k].as_f64().expect("q")),
+            ),
+        },
+        serde_json::from_value(eye["intrinsics"].clone()).expect("intrinsics"),
+    )
+    .expect("the eye camera");
+    // Points in front of the eye, seen where it sees them.
+    let target = camera.pose.position + 3.0 * camera.view_direction();
+    let correspondences: Vec<Value> = (0..12)
+        .map(|i| {
+            let p = target
+                + glam::DVec3::new(
+                    (i % 3) as f64 * 0.4 - 0.4,
+                    (i / 3 % 2) as f64 * 0.5 - 0.25,
+                    (i / 6) as f64 * 0.3 + (i % 2) as f64 * 0.1,
+                );
+            let px = camera.project(p).expect("in front");
+            json!({"pixel": px.to_array(), "point": p.to_array()})
+        })
+        .collect();
+    let before = c.revision();
+    let got = c.ok(
+        "POST",
+        solve,
+        solve,
+        Some(json!({"intrinsics": "eye", "correspondences": correspondences})),
+    );
+    assert_eq!(got["revision"], before, "{got}");
+    assert_eq!(got["inliers"].as_array().map(Vec::len), Some(12), "{got}");
+    assert!(got.get("stored_as").is_none());
+    let stored = c.ok(
+        "POST",
+        solve,
+        solve,
+        Some(json!({
+            "intrinsics": eye["intrinsics"],
+            "correspondences": correspondences,
+            "store_as": "solved",
+            "threshold_px": 2,
+            "seed": 1,
+        })),
+    );
+    assert_eq!(stored["stored_as"], "solved");
+    assert_eq!(stored["revision"], before + 1, "{stored}");
+    assert_eq!(c.revision(), before + 1, "store_as is one write");
+    c.ok("GET", "/v1/cameras/{name}", "/v1/cameras/solved", None);
+    c.ok("DELETE", "/v1/cameras/{name}", "/v1/cameras/solved", None);
+
+    c.refused_json(
+        "POST",
+        solve,
+        solve,
+        json!({"intrinsics": "eye", "correspondences": correspondences[..3]}),
+        422,
+        Spec::Either,
+    );
+    c.refused_json(
+        "POST",
+        solve,
+        solve,
+        json!({"intrinsics": "eye", "correspondences": [{"pixel": [1, 2], "vertex": 987_654_321u64}]}),
+        422,
+        Spec::Either,
+    );
+    c.refused_json(
+        "POST",
+        solve,
+        solve,
+        json!({"intrinsics": "nobody", "correspondences": correspondences}),
+        404,
+        Spec::Either,
+    );
+    c.refused_json(
+        "POST",
+        solve,
+        solve,
+        json!({"intrinsics": "eye", "correspondences": [{"pixel": [1, 2]}]}),
+        400,
+        Spec::Refuses,
+    );
+    c.refused_json(
+        "POST",
+        solve,
+        solve,
+        json!({"intrinsics": "eye", "correspondences": correspondences, "focal": 1}),
+        400,
+        Spec::Refuses,
     );
 }
 

@@ -515,6 +515,42 @@ fn find_entity_answers_for_every_kind() {
     assert_sound(&w);
 }
 
+#[test]
+fn find_vertices_agrees_with_find_entity_and_world_position() {
+    let mut w = World::new();
+    let a = arm(&mut w);
+    w.transform(a.shoulder, Entity::Body, &rot(DVec3::Z, 0.7), Frame::World)
+        .unwrap();
+    let every: Vec<Serial> = (0..w.next_serial().get() + 3).map(Serial).collect();
+    // Asked in reverse, with repeats: answers follow the order asked.
+    let mut asked: Vec<Serial> = every.iter().rev().copied().collect();
+    asked.extend([Serial(9), Serial(9)]);
+    let found = w.find_vertices(&asked);
+    assert_eq!(found.len(), asked.len());
+    let mut vertices = 0;
+    for (s, got) in asked.iter().zip(&found) {
+        let want = match w.find_entity(*s) {
+            Some((b, Entity::Vertex(v))) => Some((b, v, w.world_position(b, v).unwrap())),
+            _ => None,
+        };
+        assert_eq!(*got, want, "serial {}", s.get());
+        vertices += usize::from(got.is_some());
+    }
+    assert!(
+        vertices >= 4 * 8,
+        "every cube's vertices are found ({vertices})"
+    );
+    // A killed body's vertices are found no more.
+    let hand_vertex = serials_of(w.body(a.hand).unwrap())
+        .into_iter()
+        .find(|&s| matches!(w.find_entity(s), Some((_, Entity::Vertex(_)))))
+        .unwrap();
+    assert!(w.find_vertices(&[hand_vertex])[0].is_some());
+    w.kill(a.hand).unwrap();
+    assert_eq!(w.find_vertices(&[hand_vertex]), vec![None]);
+    assert_eq!(w.find_vertices(&[]), vec![]);
+}
+
 // -------------------------------------------------------------- insert, serials
 
 #[test]

@@ -138,6 +138,12 @@ impl<T> Arena<T> {
         (self.serials[slot] == serial).then_some(slot)
     }
 
+    /// The least and greatest serial the index may hold (`None` when it is empty): every
+    /// live serial of this arena lies in that range, which may also cover dead ones.
+    pub fn serial_bounds(&self) -> Option<(Serial, Serial)> {
+        Some((*self.index_serials.first()?, *self.index_serials.last()?))
+    }
+
     /// Iterates the live slots in slot order.
     pub fn live_slots(&self) -> impl Iterator<Item = usize> + '_ {
         self.serials

@@ -256,6 +256,12 @@ impl Body {
         self.vertices.find(s).map(VertexId::from_index)
     }
 
+    /// A range holding the serial of every live vertex of this body (and maybe others):
+    /// a cheap test that a serial cannot be one of its vertices. `None` without vertices.
+    pub fn vertex_serial_bounds(&self) -> Option<(Serial, Serial)> {
+        self.vertices.serial_bounds()
+    }
+
     /// Bytes of heap held by the three arenas (capacity), for memory accounting.
     pub fn heap_bytes(&self) -> usize {
         self.faces.heap_bytes() + self.edges.heap_bytes() + self.vertices.heap_bytes()

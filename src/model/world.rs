@@ -311,6 +311,44 @@ impl World {
         })
     }
 
+    /// Many vertices by serial number at once: for each of `serials`, the body and
+    /// vertex it names and the vertex's world locus, or `None` when it is no live vertex
+    /// (never issued, killed, or a face, edge or body).
+    ///
+    /// Cost: one pass over the bodies, each passed over unless the range of its vertex
+    /// serials holds a wanted one (a binary search), so O(bodies · log n + n · log V),
+    /// where [`World::find_entity`] would be O(bodies) for each.
+    pub fn find_vertices(&self, serials: &[Serial]) -> Vec<Option<(BodyId, VertexId, DVec3)>> {
+        let mut out = vec![None; serials.len()];
+        let mut wanted: Vec<(Serial, usize)> = serials
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| **s != Serial::NONE)
+            .map(|(i, &s)| (s, i))
+            .collect();
+        wanted.sort_unstable();
+        if wanted.is_empty() {
+            return out;
+        }
+        for (id, node) in self.tree.iter() {
+            let Some((lo, hi)) = node.body.vertex_serial_bounds() else {
+                continue;
+            };
+            let start = wanted.partition_point(|(s, _)| *s < lo);
+            let mut pose = None;
+            for &(s, i) in wanted[start..].iter().take_while(|(s, _)| *s <= hi) {
+                let Some(v) = node.body.vertex_by_serial(s) else {
+                    continue;
+                };
+                let Some(p) = *pose.get_or_insert_with(|| self.tree.world_pose(id)) else {
+                    continue;
+                };
+                out[i] = Some((id, v, p.transform_point(node.body.position(v))));
+            }
+        }
+        out
+    }
+
     /// The camera with this name.
     pub fn camera(&self, name: &str) -> Option<&Camera> {
         self.cameras.get(name)

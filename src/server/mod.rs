@@ -133,6 +133,9 @@ pub fn build<J: Journal>(
         metrics: metrics.clone(),
         appearance: Arc::new(api::appearance::Appearance::new(limits.max_render_pixels)),
         spatial: Arc::new(api::spatial::SpatialAccess::new()),
+        solves: Arc::new(Semaphore::new(
+            std::thread::available_parallelism().map_or(2, |n| n.get()),
+        )),
     };
     let one_line_per_request = TraceLayer::new_for_http()
         .make_span_with(DefaultMakeSpan::new().level(Level::INFO))

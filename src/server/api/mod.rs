@@ -5,6 +5,7 @@
 //! tokens configured, a request without the role is refused before its handler runs.
 
 pub mod appearance;
+pub mod camera_solution;
 mod feed;
 mod model;
 mod ops;
@@ -50,6 +51,8 @@ pub struct AppState {
     pub appearance: Arc<appearance::Appearance>,
     /// The spatial index queries share.
     pub spatial: Arc<spatial::SpatialAccess>,
+    /// Turns for camera solutions: one per core.
+    pub solves: Arc<tokio::sync::Semaphore>,
 }
 
 impl FromRef<AppState> for Handle {
@@ -112,6 +115,10 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
             reads(get(appearance::camera_image)),
         )
         .route("/v1/appearance", reads(post(appearance::appearance)))
+        .route(
+            "/v1/camera-solution",
+            reads(post(camera_solution::camera_solution)),
+        )
         .route(
             "/v1/cameras/{name}",
             reads(get(get_camera))

@@ -1,0 +1,464 @@
+//! Camera solution over HTTP: `POST /v1/camera-solution`.
+//!
+//! A request gives 2D–3D correspondences, each a pixel and either a model vertex (by id:
+//! its world locus is read from the model at the request's snapshot) or a world point,
+//! and the camera's intrinsics (inline, or a stored camera's). The solve
+//! ([`solve_pnp`]: LO-RANSAC around P3P, SQPnP on the consensus, robust
+//! Levenberg–Marquardt) runs on a blocking thread, at most one per core at a time.
+//!
+//! Pixels are in the API's convention (the camera module's): `u` from the left edge, `v`
+//! from the top, pixel `(i, j)` covering `[i, i+1) × [j, j+1)`, so a vertex seen by
+//! [`Camera::project`] at `(u, v)` is given as `[u, v]`. OpenCV puts integer coordinates
+//! at pixel centres; its `(u − ½, v − ½)` with its principal point `(cx − ½, cy − ½)`
+//! (the `camera_matrix` answered) describe the same rays, so the answered `rvec`/`tvec`
+//! are OpenCV's extrinsics as they are.
+//!
+//! The answer is the camera (pose and intrinsics, as `GET /v1/cameras/{name}` gives one),
+//! OpenCV's `rvec`, `tvec` and camera matrix, the RMS reprojection error of the inliers
+//! in pixels, the inlier indices (into `correspondences`), and iteration counts. With
+//! `store_as`, the camera is also stored under that name, as `PUT /v1/cameras/{name}`
+//! would (one write, a new revision).
+//!
+//! Solving needs the `read` role; `store_as` needs `write`.
+//!
+//! Errors (`application/problem+json`), none of which changes the world:
+//! * 400: malformed JSON, unknown fields, a correspondence with neither or both of
+//!   `vertex` and `point`, a `store_as` that is no valid camera name;
+//! * 403: `store_as` with a token that may only read;
+//! * 404: `intrinsics` names no stored camera;
+//! * 422 `unknown-vertex`: a `vertex` is not a live vertex of the model (every such id is
+//!   named);
+//! * 422 `too-few-correspondences`, `too-many-correspondences`;
+//! * 422 `invalid-intrinsics`, `invalid-parameter`, `invalid-correspondences` (numbers
+//!   out of range or not finite);
+//! * 422 `degenerate-correspondences`: the points cannot fix a camera (all on one line,
+//!   coincident);
+//! * 422 `no-consensus`: no camera agrees with enough correspondences;
+//! * 422 `did-not-converge`, `no-pose-in-front`: the solve found no camera it can vouch
+//!   for; no camera is ever answered that the solver does not stand behind.
+
+use std::time::Instant;
+
+use axum::Json;
+use axum::extract::rejection::JsonRejection;
+use axum::extract::{Extension, State};
+use axum::http::StatusCode;
+use axum::http::header::ETAG;
+use axum::response::IntoResponse;
+use glam::{DMat3, DVec2, DVec3};
+use serde::{Deserialize, Serialize};
+
+use super::precondition::etag;
+use super::{Answer, AppState, snapshot};
+use crate::model::camera::{Camera, Intrinsics};
+use crate::model::{Serial, World};
+use crate::server::actor::Applied;
+use crate::server::auth::Role;
+use crate::server::dto::{CameraReq, IntrinsicsDto, PoseDto};
+use crate::server::edit::Edit;
+use crate::server::problem::Problem;
+use crate::solve::{PixelIntrinsics, PnpOptions, PnpSolution, SolveError, solve_pnp};
+
+/// The most correspondences one request may give.
+pub const MAX_CORRESPONDENCES: usize = 20_000;
+
+/// The most RANSAC iterations a request may ask for.
+pub const MAX_RANSAC_ITERATIONS: usize = 1_000_000;
+
+/// Unknown vertex ids named in one problem answer at most.
+const MAX_NAMED_IDS: usize = 20;
+
+/// `POST /v1/camera-solution`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolveReq {
+    /// The camera's intrinsics, or the name of a stored camera whose intrinsics to use.
+    pub intrinsics: IntrinsicsRef,
+    /// What the camera sees: pixels and the world points seen there.
+    pub correspondences: Vec<CorrespondenceDto>,
+    /// Store the solved camera under this name.
+    #[serde(default)]
+    pub store_as: Option<String>,
+    /// Reprojection error in pixels up to which a correspondence counts as an inlier
+    /// (default 4).
+    #[serde(default)]
+    pub threshold_px: Option<f64>,
+    /// RANSAC's confidence that it has drawn an all-inlier sample when it stops
+    /// (default 0.999).
+    #[serde(default)]
+    pub confidence: Option<f64>,
+    /// The most RANSAC iterations (default 10,000).
+    #[serde(default)]
+    pub max_iterations: Option<usize>,
+    /// The fewest inliers the camera may rest on (default 6, at least 4).
+    #[serde(default)]
+    pub min_inliers: Option<usize>,
+    /// RANSAC's seed: the same request gives the same camera (default 0).
+    #[serde(default)]
+    pub seed: Option<u64>,
+}
+
+/// Intrinsics given inline, or taken from a stored camera.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum IntrinsicsRef {
+    /// A stored camera's name.
+    Named(String),
+    /// Intrinsics in pixels.
+    Inline(IntrinsicsDto),
+}
+
+/// One correspondence: a pixel and exactly one of a vertex id and a world point.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CorrespondenceDto {
+    /// Where the point is seen, `[u, v]` pixels.
+    pub pixel: [f64; 2],
+    /// A vertex of the model: its world locus is the point.
+    #[serde(default)]
+    pub vertex: Option<u64>,
+    /// The point, `[x, y, z]` meters in the world.
+    #[serde(default)]
+    pub point: Option<[f64; 3]>,
+}
+
+/// A solved camera as answered.
+#[derive(Debug, Serialize)]
+struct SolvedCamera {
+    /// Pose in the world (the camera looks along its −k axis).
+    pose: PoseDto,
+    /// Intrinsics.
+    intrinsics: IntrinsicsDto,
+    /// The direction it looks along.
+    view_direction: [f64; 3],
+}
+
+/// The extrinsics and camera matrix in OpenCV's convention.
+#[derive(Debug, Serialize)]
+struct OpenCv {
+    /// Rotation vector (axis × angle, radians), world to camera.
+    rvec: [f64; 3],
+    /// Translation, world to camera.
+    tvec: [f64; 3],
+    /// The 3×3 camera matrix K, by rows (principal point in OpenCV's pixel-centre
+    /// convention).
+    camera_matrix: [[f64; 3]; 3],
+}
+
+/// Iteration counts.
+#[derive(Debug, Serialize)]
+struct Iterations {
+    /// RANSAC samples drawn.
+    ransac: usize,
+    /// Levenberg–Marquardt iterations.
+    refine: usize,
+}
+
+/// The answer of `POST /v1/camera-solution`.
+#[derive(Debug, Serialize)]
+struct Solved {
+    camera: SolvedCamera,
+    opencv: OpenCv,
+    /// RMS reprojection error over the inliers, pixels.
+    rms_px: f64,
+    /// Indices of the inlier correspondences, ascending.
+    inliers: Vec<usize>,
+    /// Number of correspondences given.
+    correspondences: usize,
+    iterations: Iterations,
+    /// Whether RANSAC stopped at its confidence rather than its iteration limit.
+    confident: bool,
+    /// The name the camera was stored under.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stored_as: Option<String>,
+    /// The world's revision: the one the vertices were read at, or the one the store
+    /// made.
+    revision: u64,
+}
+
+fn unprocessable(kind: &'static str, title: &'static str, detail: impl Into<String>) -> Problem {
+    Problem::new(StatusCode::UNPROCESSABLE_ENTITY, kind, title, detail)
+}
+
+/// The problem answer of a solve that failed.
+fn solve_problem(e: SolveError) -> Problem {
+    let detail = e.to_string();
+    match e {
+        SolveError::TooFewPoints { .. } => {
+            unprocessable("too-few-correspondences", "Too few correspondences", detail)
+        }
+        SolveError::Degenerate(_) => unprocessable(
+            "degenerate-correspondences",
+            "The correspondences cannot fix a camera",
+            detail,
+        ),
+        SolveError::NonFinite { .. } | SolveError::LengthMismatch { .. } => {
+            unprocessable("invalid-correspondences", "Invalid correspondences", detail)
+        }
+        SolveError::BadParameter { .. } | SolveError::NotARotation { .. } => {
+            unprocessable("invalid-parameter", "Invalid parameter", detail)
+        }
+        SolveError::NoConsensus { .. } => unprocessable(
+            "no-consensus",
+            "No camera agrees with enough correspondences",
+            detail,
+        ),
+        SolveError::NoPoseInFront => unprocessable(
+            "no-pose-in-front",
+            "No camera sees the points in front of it",
+            detail,
+        ),
+        SolveError::DidNotConverge { .. } => {
+            unprocessable("did-not-converge", "The solve did not converge", detail)
+        }
+    }
+}
+
+impl SolveReq {
+    /// The solver's options, checked.
+    fn options(&self) -> Result<PnpOptions, Problem> {
+        let mut o = PnpOptions::default();
+        let bad = |what: &str, why: &str| {
+            Err(unprocessable(
+                "invalid-parameter",
+                "Invalid parameter",
+                format!("{what} {why}"),
+            ))
+        };
+        if let Some(t) = self.threshold_px {
+            if !(t.is_finite() && t > 0.0) {
+                return bad("threshold_px", "must be a positive number of pixels");
+            }
+            o.threshold_px = t;
+        }
+        if let Some(c) = self.confidence {
+            if !(c > 0.0 && c < 1.0) {
+                return bad("confidence", "must lie strictly between 0 and 1");
+            }
+            o.confidence = c;
+        }
+        if let Some(n) = self.max_iterations {
+            if n == 0 || n > MAX_RANSAC_ITERATIONS {
+                return bad(
+                    "max_iterations",
+                    &format!("must lie between 1 and {MAX_RANSAC_ITERATIONS}"),
+                );
+            }
+            o.max_iterations = n;
+        }
+        if let Some(n) = self.min_inliers {
+            if n < crate::solve::MIN_CONSENSUS {
+                return bad(
+                    "min_inliers",
+                    &format!("must be at least {}", crate::solve::MIN_CONSENSUS),
+                );
+            }
+            o.min_inliers = n;
+        }
+        if let Some(s) = self.seed {
+            o.seed = s;
+        }
+        Ok(o)
+    }
+
+    /// The intrinsics, from the request or the world's camera.
+    fn intrinsics(&self, world: &World) -> Result<Intrinsics, Problem> {
+        match &self.intrinsics {
+            IntrinsicsRef::Named(name) => world
+                .camera(name)
+                .map(|c| c.intrinsics)
+                .ok_or_else(|| Problem::not_found(format!("no camera is named {name:?}"))),
+            IntrinsicsRef::Inline(i) => Intrinsics::new(i.width, i.height, i.fx, i.fy, i.cx, i.cy)
+                .map_err(|e| {
+                    unprocessable("invalid-intrinsics", "Invalid intrinsics", e.to_string())
+                }),
+        }
+    }
+
+    /// The world points and pixels, vertices read from `world`. Refused when a
+    /// correspondence has neither or both of `vertex` and `point` (400), or names a vertex
+    /// the model does not have (422, every such id named).
+    fn pairs(&self, world: &World) -> Result<(Vec<DVec3>, Vec<DVec2>), Problem> {
+        let n = self.correspondences.len();
+        if n > MAX_CORRESPONDENCES {
+            return Err(unprocessable(
+                "too-many-correspondences",
+                "Too many correspondences",
+                format!("{n} correspondences; at most {MAX_CORRESPONDENCES} are taken"),
+            ));
+        }
+        let mut ids = Vec::new();
+        for (i, c) in self.correspondences.iter().enumerate() {
+            match (c.vertex, c.point) {
+                (Some(v), None) => ids.push(Serial(v)),
+                (None, Some(_)) => {}
+                _ => {
+                    return Err(Problem::bad_request(format!(
+                        "correspondences[{i}]: give exactly one of \"vertex\" and \"point\""
+                    )));
+                }
+            }
+        }
+        let found = world.find_vertices(&ids);
+        let missing: Vec<u64> = ids
+            .iter()
+            .zip(&found)
+            .filter(|(_, f)| f.is_none())
+            .map(|(s, _)| s.get())
+            .collect();
+        if !missing.is_empty() {
+            let shown: Vec<String> = missing
+                .iter()
+                .take(MAX_NAMED_IDS)
+                .map(u64::to_string)
+                .collect();
+            let more = if missing.len() > MAX_NAMED_IDS {
+                format!(" and {} more", missing.len() - MAX_NAMED_IDS)
+            } else {
+                String::new()
+            };
+            return Err(unprocessable(
+                "unknown-vertex",
+                "Unknown vertex",
+                format!("no live vertex has the id {}{more}", shown.join(", ")),
+            ));
+        }
+        let mut loci = found.into_iter().flatten().map(|(_, _, p)| p);
+        let mut points = Vec::with_capacity(n);
+        let mut pixels = Vec::with_capacity(n);
+        for c in &self.correspondences {
+            let p = match c.point {
+                Some(p) => DVec3::from_array(p),
+                None => loci.next().ok_or_else(|| {
+                    Problem::internal("a vertex was found but its locus went missing")
+                })?,
+            };
+            points.push(p);
+            pixels.push(DVec2::from_array(c.pixel));
+        }
+        Ok((points, pixels))
+    }
+}
+
+/// OpenCV's camera matrix of `k`, by rows.
+fn camera_matrix(k: &Intrinsics) -> [[f64; 3]; 3] {
+    let m: DMat3 = k.opencv_matrix();
+    let r = m.transpose();
+    [
+        r.x_axis.to_array(),
+        r.y_axis.to_array(),
+        r.z_axis.to_array(),
+    ]
+}
+
+/// `POST /v1/camera-solution`.
+pub(super) async fn camera_solution(
+    State(state): State<AppState>,
+    role: Option<Extension<Role>>,
+    req: Result<Json<SolveReq>, JsonRejection>,
+) -> Answer {
+    let Json(req) = req.map_err(|e| Problem::bad_request(e.body_text()))?;
+    let options = req.options()?;
+    if let Some(name) = &req.store_as {
+        // Solving only reads the world; storing the camera writes it.
+        let role = role.map_or(Role::Admin, |Extension(r)| r);
+        if role < Role::Write {
+            return Err(Problem::new(
+                StatusCode::FORBIDDEN,
+                "forbidden",
+                "Forbidden",
+                format!(
+                    "store_as needs the {} role; the token holds {role}",
+                    Role::Write
+                ),
+            ));
+        }
+        crate::model::parts::validate_name(name)
+            .map_err(|reason| Problem::bad_request(format!("store_as {name:?}: {reason}")))?;
+    }
+    let world = snapshot(&state.handle).await?;
+    let intrinsics = req.intrinsics(&world)?;
+    let (points, pixels) = req.pairs(&world)?;
+    let _turn = state
+        .solves
+        .clone()
+        .acquire_owned()
+        .await
+        .map_err(|_| Problem::unavailable())?;
+    let started = Instant::now();
+    let k = PixelIntrinsics {
+        fx: intrinsics.fx,
+        fy: intrinsics.fy,
+        cx: intrinsics.cx,
+        cy: intrinsics.cy,
+    };
+    let solved: Result<PnpSolution, SolveError> =
+        tokio::task::spawn_blocking(move || solve_pnp(&points, &pixels, &k, &options))
+            .await
+            .map_err(Problem::internal)?;
+    let n = req.correspondences.len();
+    let elapsed_ms = started.elapsed().as_secs_f64() * 1e3;
+    let solution = solved.map_err(|e| {
+        tracing::info!(correspondences = n, elapsed_ms, error = %e, "camera solution refused");
+        solve_problem(e)
+    })?;
+    tracing::info!(
+        correspondences = n,
+        inliers = solution.inliers.len(),
+        rms_px = solution.rms_px,
+        ransac_iterations = solution.ransac_iterations,
+        elapsed_ms,
+        "camera solved"
+    );
+    let camera = Camera::from_opencv(
+        solution.pose.rotation,
+        solution.pose.translation,
+        intrinsics,
+    )
+    .map_err(Problem::internal)?;
+    let dto = IntrinsicsDto {
+        width: intrinsics.width,
+        height: intrinsics.height,
+        fx: intrinsics.fx,
+        fy: intrinsics.fy,
+        cx: intrinsics.cx,
+        cy: intrinsics.cy,
+    };
+    let mut revision = world.revision();
+    if let Some(name) = &req.store_as {
+        let put = Edit::PutCamera {
+            name: name.clone(),
+            camera: CameraReq {
+                pose: Some(camera.pose.into()),
+                look_at: None,
+                intrinsics: Some(dto),
+                baumgart: None,
+            },
+        };
+        let Applied { revision: r, .. } = state.handle.apply_if(put, None).await?;
+        revision = r;
+    }
+    let answer = Solved {
+        camera: SolvedCamera {
+            pose: camera.pose.into(),
+            intrinsics: dto,
+            view_direction: camera.view_direction().to_array(),
+        },
+        opencv: OpenCv {
+            rvec: solution.rvec.to_array(),
+            tvec: solution.tvec.to_array(),
+            camera_matrix: camera_matrix(&intrinsics),
+        },
+        rms_px: solution.rms_px,
+        inliers: solution.inliers,
+        correspondences: n,
+        iterations: Iterations {
+            ransac: solution.ransac_iterations,
+            refine: solution.refine_iterations,
+        },
+        confident: solution.confident,
+        stored_as: req.store_as,
+        revision,
+    };
+    Ok(([(ETAG, etag(revision))], Json(answer)).into_response())
+}
