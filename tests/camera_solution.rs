@@ -473,3 +473,82 @@ fn bad_requests_get_problems_and_change_nothing() {
     // The server still solves.
     s.post("/v1/camera-solution", &with(json!({}))).ok();
 }
+
+#[test]
+fn the_focal_length_is_solved_when_asked_and_refused_when_the_view_cannot_fix_it() {
+    let sc = scene();
+    let s = TestServer::with_world(sc.world);
+    let k = &sc.truth.intrinsics;
+    // The intrinsics' focal lengths are wrong on purpose: only their centre and aspect
+    // are used.
+    let guess = json!({"width": k.width, "height": k.height, "fx": 900.0, "fy": 900.0, "cx": k.cx, "cy": k.cy});
+    let correspondences: Vec<Value> = sc
+        .seen
+        .iter()
+        .map(|(id, _, px)| json!({"pixel": px.to_array(), "vertex": id}))
+        .collect();
+    let a = s
+        .post(
+            "/v1/camera-solution",
+            &json!({"intrinsics": guess, "correspondences": correspondences, "solve_focal": true}),
+        )
+        .ok();
+    let (angle, offset) = errors(&a, &sc.truth);
+    assert!(angle < 1e-6 && offset < 1e-6, "{angle}° {offset} m: {a}");
+    for key in ["fx", "fy"] {
+        let got = a["focal"][key].as_f64().expect("a focal length");
+        assert!((got - 600.0).abs() < 1e-6, "{key} {got}: {a}");
+        assert_eq!(a["camera"]["intrinsics"][key], a["focal"][key]);
+    }
+    assert!(
+        a["focal"]["fx_std"].as_f64().expect("a spread") < 30.0,
+        "{a}"
+    );
+    assert_eq!(a["camera"]["intrinsics"]["cx"], k.cx);
+    // Without solve_focal the answer has no focal field.
+    let plain = s
+        .post(
+            "/v1/camera-solution",
+            &json!({"intrinsics": "truth", "correspondences": correspondences}),
+        )
+        .ok();
+    assert!(plain.get("focal").is_none(), "{plain}");
+
+    // A plane seen face-on: the focal length trades for the distance.
+    let before = revision(&s);
+    let cam = &sc.truth;
+    let mut rng = Rng(5);
+    let face_on: Vec<Value> = (0..30)
+        .map(|n| {
+            let (a, b) = ((n % 6) as f64 * 0.2 - 0.5, (n / 6) as f64 * 0.2 - 0.4);
+            let p = cam.pose.position + 3.0 * cam.view_direction() + a * cam.i() + b * cam.j();
+            let px =
+                cam.project(p).expect("in front") + 0.3 * DVec2::new(rng.normal(), rng.normal());
+            json!({"pixel": px.to_array(), "point": p.to_array()})
+        })
+        .collect();
+    let p = s
+        .post(
+            "/v1/camera-solution",
+            &json!({"intrinsics": guess, "correspondences": face_on, "solve_focal": true, "store_as": "x"}),
+        )
+        .problem(422);
+    assert_eq!(
+        p["type"], "urn:winged:problem:degenerate-correspondences",
+        "{p}"
+    );
+    assert!(
+        p["detail"]
+            .as_str()
+            .expect("detail")
+            .contains("focal length"),
+        "{p}"
+    );
+    assert_eq!(revision(&s), before);
+    // The same points with the focal length known are a fine camera.
+    s.post(
+        "/v1/camera-solution",
+        &json!({"intrinsics": "truth", "correspondences": face_on}),
+    )
+    .ok();
+}

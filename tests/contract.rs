@@ -1495,6 +1495,13 @@ fn camera_solution(c: &Contract) {
     assert_eq!(c.revision(), before + 1, "store_as is one write");
     c.ok("GET", "/v1/cameras/{name}", "/v1/cameras/solved", None);
     c.ok("DELETE", "/v1/cameras/{name}", "/v1/cameras/solved", None);
+    let focal = c.ok(
+        "POST",
+        solve,
+        solve,
+        Some(json!({"intrinsics": "eye", "correspondences": correspondences, "solve_focal": true})),
+    );
+    assert!(focal["focal"]["fx"].is_f64(), "{focal}");
 
     c.refused_json(
         "POST",

@@ -18,6 +18,10 @@
 //!   its inliers, or [`SolveError::NoConsensus`].
 //! * [`solve_pnp`]: the whole solve from pixels with known intrinsics: RANSAC, then
 //!   refinement on the consensus, the answer in pixels and in OpenCV's `rvec`/`tvec`.
+//! * [`solve_pnp_focal`]: the same with the focal length unknown (the principal point
+//!   and pixel aspect known): RANSAC over direct linear transforms (or homographies, for
+//!   planar points), refinement of pose and focal length together, and a refusal when the
+//!   view does not determine the focal length.
 //!
 //! # Convention
 //!
@@ -35,6 +39,7 @@
 //! The interface uses glam's `f64` types like the rest of the crate; nalgebra is used
 //! inside only for the decompositions and solves glam does not have.
 
+pub mod focal;
 pub mod p3p;
 pub mod pnp;
 pub mod ransac;
@@ -43,6 +48,7 @@ pub mod sqpnp;
 #[cfg(test)]
 mod testing;
 
+pub use focal::{FocalSolution, solve_pnp_focal};
 pub use p3p::{MAX_P3P_SOLUTIONS, p3p};
 pub use pnp::{PixelIntrinsics, PnpOptions, PnpSolution, rotation_vector, solve_pnp};
 pub use ransac::{Consensus, LocalOptimisation, MIN_CONSENSUS, RansacOptions, ransac_pnp};
@@ -64,6 +70,9 @@ pub enum Degeneracy {
     CollinearPoints,
     /// A viewing direction is zero, or two viewing directions are (nearly) parallel.
     ParallelBearings,
+    /// The points are seen with too little perspective to tell the focal length from
+    /// the distance (a plane seen face-on, a small distant cluster).
+    FocalUnobservable,
 }
 
 impl std::fmt::Display for Degeneracy {
@@ -73,6 +82,9 @@ impl std::fmt::Display for Degeneracy {
             Degeneracy::CollinearPoints => "the world points lie on one line",
             Degeneracy::ParallelBearings => {
                 "a viewing direction is zero or two viewing directions are parallel"
+            }
+            Degeneracy::FocalUnobservable => {
+                "the points are seen with too little perspective to fix the focal length"
             }
         })
     }

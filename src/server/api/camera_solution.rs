@@ -13,6 +13,10 @@
 //! (the `camera_matrix` answered) describe the same rays, so the answered `rvec`/`tvec`
 //! are OpenCV's extrinsics as they are.
 //!
+//! With `solve_focal`, the focal length is solved too ([`solve_pnp_focal`]): the
+//! intrinsics then give the image size, principal point and pixel aspect only, and a
+//! view that cannot determine the focal length is refused.
+//!
 //! The answer is the camera (pose and intrinsics, as `GET /v1/cameras/{name}` gives one),
 //! OpenCV's `rvec`, `tvec` and camera matrix, the RMS reprojection error of the inliers
 //! in pixels, the inlier indices (into `correspondences`), and iteration counts. With
@@ -57,7 +61,9 @@ use crate::server::auth::Role;
 use crate::server::dto::{CameraReq, IntrinsicsDto, PoseDto};
 use crate::server::edit::Edit;
 use crate::server::problem::Problem;
-use crate::solve::{PixelIntrinsics, PnpOptions, PnpSolution, SolveError, solve_pnp};
+use crate::solve::{
+    PixelIntrinsics, PnpOptions, PnpSolution, SolveError, solve_pnp, solve_pnp_focal,
+};
 
 /// The most correspondences one request may give.
 pub const MAX_CORRESPONDENCES: usize = 20_000;
@@ -96,6 +102,10 @@ pub struct SolveReq {
     /// RANSAC's seed: the same request gives the same camera (default 0).
     #[serde(default)]
     pub seed: Option<u64>,
+    /// Solve the focal length too: the intrinsics' principal point and pixel aspect
+    /// (`fy/fx`) are kept, their focal lengths are not used.
+    #[serde(default)]
+    pub solve_focal: bool,
 }
 
 /// Intrinsics given inline, or taken from a stored camera.
@@ -145,6 +155,17 @@ struct OpenCv {
     camera_matrix: [[f64; 3]; 3],
 }
 
+/// A solved focal length.
+#[derive(Debug, Serialize)]
+struct Focal {
+    /// Horizontal focal length, pixels.
+    fx: f64,
+    /// Vertical focal length, pixels.
+    fy: f64,
+    /// The estimated standard deviation of `fx`, pixels.
+    fx_std: f64,
+}
+
 /// Iteration counts.
 #[derive(Debug, Serialize)]
 struct Iterations {
@@ -168,6 +189,9 @@ struct Solved {
     iterations: Iterations,
     /// Whether RANSAC stopped at its confidence rather than its iteration limit.
     confident: bool,
+    /// The focal length, when it was solved.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    focal: Option<Focal>,
     /// The name the camera was stored under.
     #[serde(skip_serializing_if = "Option::is_none")]
     stored_as: Option<String>,
@@ -392,13 +416,28 @@ pub(super) async fn camera_solution(
         cx: intrinsics.cx,
         cy: intrinsics.cy,
     };
-    let solved: Result<PnpSolution, SolveError> =
-        tokio::task::spawn_blocking(move || solve_pnp(&points, &pixels, &k, &options))
-            .await
-            .map_err(Problem::internal)?;
+    let solve_focal = req.solve_focal;
+    let solved: Result<(PnpSolution, Option<Focal>), SolveError> =
+        tokio::task::spawn_blocking(move || {
+            if solve_focal {
+                let principal = DVec2::new(k.cx, k.cy);
+                solve_pnp_focal(&points, &pixels, principal, k.fy / k.fx, &options).map(|s| {
+                    let focal = Focal {
+                        fx: s.fx,
+                        fy: s.fy,
+                        fx_std: s.fx_std,
+                    };
+                    (s.solution, Some(focal))
+                })
+            } else {
+                solve_pnp(&points, &pixels, &k, &options).map(|s| (s, None))
+            }
+        })
+        .await
+        .map_err(Problem::internal)?;
     let n = req.correspondences.len();
     let elapsed_ms = started.elapsed().as_secs_f64() * 1e3;
-    let solution = solved.map_err(|e| {
+    let (solution, focal) = solved.map_err(|e| {
         tracing::info!(correspondences = n, elapsed_ms, error = %e, "camera solution refused");
         solve_problem(e)
     })?;
@@ -410,6 +449,14 @@ pub(super) async fn camera_solution(
         elapsed_ms,
         "camera solved"
     );
+    let intrinsics = match &focal {
+        Some(f) => Intrinsics {
+            fx: f.fx,
+            fy: f.fy,
+            ..intrinsics
+        },
+        None => intrinsics,
+    };
     let camera = Camera::from_opencv(
         solution.pose.rotation,
         solution.pose.translation,
@@ -457,6 +504,7 @@ pub(super) async fn camera_solution(
             refine: solution.refine_iterations,
         },
         confident: solution.confident,
+        focal,
         stored_as: req.store_as,
         revision,
     };
