@@ -39,7 +39,9 @@
 //! The interface uses glam's `f64` types like the rest of the crate; nalgebra is used
 //! inside only for the decompositions and solves glam does not have.
 
+pub mod align;
 pub mod focal;
+pub mod image;
 pub mod p3p;
 pub mod pnp;
 pub mod ransac;
@@ -56,6 +58,8 @@ pub use refine::{Loss, MIN_POINTS, RESIDUAL_CAP, RefineOptions, Refined, refine_
 pub use sqpnp::{SqpnpMinimum, SqpnpSolution, sqpnp};
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
+
+use crate::model::camera::CameraError;
 
 /// How far from orthonormal (largest entry of `RᵀR − I`) a rotation handed to or returned
 /// by this module may be.
@@ -150,6 +154,65 @@ pub enum SolveError {
     DidNotConverge {
         /// Iterations taken.
         iterations: usize,
+    },
+    /// An image whose samples are not 1 (grey), 2 (grey, alpha), 3 (RGB) or 4 (RGBA)
+    /// bytes per pixel.
+    #[error("an image must have 1 to 4 channels (got {channels})")]
+    ImageChannels {
+        /// The channel count given.
+        channels: u8,
+    },
+    /// An image whose sample buffer does not have width × height × channels bytes.
+    #[error("the image needs {expected} samples (width × height × channels), got {got}")]
+    ImageSamples {
+        /// width × height × channels (`usize::MAX` when that overflows).
+        expected: usize,
+        /// The samples given.
+        got: usize,
+    },
+    /// An image whose size is not the camera's.
+    #[error(
+        "the image is {image_width}×{image_height} pixels but the camera's is \
+         {camera_width}×{camera_height}"
+    )]
+    ImageSizeMismatch {
+        /// Image width, pixels.
+        image_width: u32,
+        /// Image height, pixels.
+        image_height: u32,
+        /// The camera's image width, pixels.
+        camera_width: u32,
+        /// The camera's image height, pixels.
+        camera_height: u32,
+    },
+    /// The camera handed in is not a valid camera.
+    #[error("bad camera: {0}")]
+    BadCamera(#[from] CameraError),
+    /// The image shows no edges: it is blank, or its contrast is below the noise.
+    #[error("the image shows no edges (blank, or too faint for its noise)")]
+    NoImageEdges,
+    /// Too little of the model's edges is visible from the camera to place it.
+    #[error(
+        "only {samples} points on the model's visible edges are in view (at least {needed} \
+         are needed)"
+    )]
+    NoEdgesVisible {
+        /// Points sampled on the visible edges.
+        samples: usize,
+        /// The fewest accepted.
+        needed: usize,
+    },
+    /// After alignment too few of the model's visible edges lie on edges of the image:
+    /// the image does not show the model from near the starting camera.
+    #[error(
+        "only {:.1} % of the model's visible edges lie on image edges (at least {:.1} % are \
+         needed)", fraction * 100.0, needed * 100.0
+    )]
+    TooFewInliers {
+        /// The fraction of edge samples within the inlier distance of an image edge.
+        fraction: f64,
+        /// The fraction required.
+        needed: f64,
     },
 }
 

@@ -68,7 +68,8 @@ pub enum Loss {
 }
 
 impl Loss {
-    fn validate(&self) -> Result<(), SolveError> {
+    /// `Ok` unless the scale is not finite and positive ([`SolveError::BadParameter`]).
+    pub(crate) fn validate(&self) -> Result<(), SolveError> {
         match *self {
             Loss::Squared => Ok(()),
             Loss::Huber { scale } | Loss::Cauchy { scale } => {
@@ -85,7 +86,7 @@ impl Loss {
     }
 
     /// `ρ(s)` and the weight `ρ′(s)` for a squared residual `s ≥ 0`.
-    fn eval(&self, s: f64) -> (f64, f64) {
+    pub(crate) fn eval(&self, s: f64) -> (f64, f64) {
         match *self {
             Loss::Squared => (s, 1.0),
             Loss::Huber { scale } => {

@@ -1,0 +1,27 @@
+//! The image side of image-based camera refinement: what an 8-bit picture says about
+//! where edges are.
+//!
+//! * [`Luma`]: a grey-level picture, made from the samples a PNG decoder gives (1 to 4
+//!   channels), halved for a coarse-to-fine pyramid.
+//! * [`EdgeMap`]: Sobel gradients, non-maximum suppression along the gradient and a
+//!   threshold set from the picture's own noise; each edge pixel (an [`Edgel`]) carries
+//!   a sub-pixel position on the edge and the edge's unit normal.
+//! * [`DistanceField`]: the exact Euclidean distance transform of a set of pixels
+//!   (Felzenszwalb–Huttenlocher), with the nearest of those pixels for every pixel, so an
+//!   edge can be found from any point of the image in constant time.
+//!
+//! # Why hand-written
+//!
+//! The one well-kept Rust crate with Canny edges and distance transforms, `imageproc`,
+//! brings the `image` crate and a dozen more (fonts, random numbers, `num`, `itertools`)
+//! into the build for three short routines, and its distance transform returns distances
+//! but not the nearest edge pixel, which the refinement needs. The routines here are
+//! small, and each is tested against a brute-force or analytic answer.
+
+mod distance;
+mod edges;
+mod luma;
+
+pub use distance::{DistanceField, NO_SITE};
+pub use edges::{EdgeMap, EdgeOptions, Edgel};
+pub use luma::Luma;
