@@ -1502,6 +1502,44 @@ fn camera_solution(c: &Contract) {
         Some(json!({"intrinsics": "eye", "correspondences": correspondences, "solve_focal": true})),
     );
     assert!(focal["focal"]["fx"].is_f64(), "{focal}");
+    // From a picture: a blank one shows no edges to align with.
+    let blank = {
+        use base64::Engine as _;
+        let mut png = Vec::new();
+        let mut encoder = png::Encoder::new(&mut png, 640, 480);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder
+            .write_header()
+            .expect("a header")
+            .write_image_data(&vec![90u8; 640 * 480])
+            .expect("pixels");
+        base64::engine::general_purpose::STANDARD.encode(png)
+    };
+    let p = c.refused_json(
+        "POST",
+        solve,
+        solve,
+        json!({"image": blank, "initial": "eye"}),
+        422,
+        Spec::Either,
+    );
+    assert_eq!(p["type"], "urn:winged:problem:no-image-edges", "{p}");
+    c.refused_json(
+        "POST",
+        solve,
+        solve,
+        json!({"image": "not base64!", "initial": "eye"}),
+        400,
+        Spec::Either,
+    );
+    c.refused_json(
+        "POST",
+        solve,
+        solve,
+        json!({"image": blank, "initial": "eye", "intrinsics": "eye"}),
+        400,
+        Spec::Refuses,
+    );
 
     c.refused_json(
         "POST",

@@ -64,7 +64,7 @@ impl Appearance {
 
     /// The scene of `world`'s revision: the cached one, or a new one built now (and
     /// cached unless a newer one already is). Blocking: call off the async threads.
-    fn scene(&self, world: &World) -> Arc<Scene> {
+    pub(super) fn scene(&self, world: &World) -> Arc<Scene> {
         let cached = |this: &Appearance| {
             this.latest
                 .lock()

@@ -1,6 +1,6 @@
-//! Camera solution over HTTP: `POST /v1/camera-solution`.
+//! Camera solution over HTTP: `POST /v1/camera-solution`, in two forms.
 //!
-//! A request gives 2D–3D correspondences, each a pixel and either a model vertex (by id:
+//! **From correspondences.** A request gives 2D–3D correspondences, each a pixel and either a model vertex (by id:
 //! its world locus is read from the model at the request's snapshot) or a world point,
 //! and the camera's intrinsics (inline, or a stored camera's). The solve
 //! ([`solve_pnp`]: LO-RANSAC around P3P, SQPnP on the consensus, robust
@@ -17,11 +17,19 @@
 //! intrinsics then give the image size, principal point and pixel aspect only, and a
 //! view that cannot determine the focal length is refused.
 //!
+//! **From an image and a rough camera.** A request gives a picture (`image`, base64
+//! PNG) and the camera it was taken with as far as it is known (`initial`: a stored
+//! camera's name or one inline, as `PUT /v1/cameras/{name}` takes it); the model's visible
+//! edges are aligned with the picture's edges ([`align_to_image`]) and the corrected
+//! camera answered. The picture must have the initial camera's size.
+//!
 //! The answer is the camera (pose and intrinsics, as `GET /v1/cameras/{name}` gives one),
 //! OpenCV's `rvec`, `tvec` and camera matrix, the RMS reprojection error of the inliers
 //! in pixels, the inlier indices (into `correspondences`), and iteration counts. With
 //! `store_as`, the camera is also stored under that name, as `PUT /v1/cameras/{name}`
-//! would (one write, a new revision).
+//! would (one write, a new revision). From an image, `edges` says how many points of the
+//! model's visible edges were matched and what fraction lies on the picture's edges, and
+//! `rms_px` is their distance to those edges.
 //!
 //! Solving needs the `read` role; `store_as` needs `write`.
 //!
@@ -39,9 +47,20 @@
 //!   coincident);
 //! * 422 `no-consensus`: no camera agrees with enough correspondences;
 //! * 422 `did-not-converge`, `no-pose-in-front`: the solve found no camera it can vouch
-//!   for; no camera is ever answered that the solver does not stand behind.
+//!   for; no camera is ever answered that the solver does not stand behind;
+//! * from an image: 400 `invalid-image` (not base64, not a PNG, broken), 413 for an
+//!   image beyond the decoder's limits, 422 `invalid-image` (not the camera's size),
+//!   `invalid-camera`, `no-image-edges` (a blank picture), `model-not-in-view` (too
+//!   little of the model's edges visible from the initial camera), `image-does-not-match`
+//!   (after alignment too little of the model lies on the picture's edges: the picture
+//!   does not show the model from near the initial camera).
 
+use std::sync::Arc;
 use std::time::Instant;
+
+use base64::Engine as _;
+use base64::engine::general_purpose::STANDARD as BASE64;
+use tokio::sync::OwnedSemaphorePermit;
 
 use axum::Json;
 use axum::extract::rejection::JsonRejection;
@@ -52,6 +71,7 @@ use axum::response::IntoResponse;
 use glam::{DMat3, DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
+use super::appearance::CameraRef;
 use super::precondition::etag;
 use super::{Answer, AppState, snapshot};
 use crate::model::camera::{Camera, Intrinsics};
@@ -60,9 +80,13 @@ use crate::server::actor::Applied;
 use crate::server::auth::Role;
 use crate::server::dto::{CameraReq, IntrinsicsDto, PoseDto};
 use crate::server::edit::Edit;
+use crate::server::limits::{ImageLimits, decode_png};
 use crate::server::problem::Problem;
+use crate::solve::align::{AlignOptions, align_to_image};
+use crate::solve::image::Luma;
 use crate::solve::{
-    PixelIntrinsics, PnpOptions, PnpSolution, SolveError, solve_pnp, solve_pnp_focal,
+    PixelIntrinsics, PnpOptions, PnpSolution, SolveError, rotation_vector, solve_pnp,
+    solve_pnp_focal,
 };
 
 /// The most correspondences one request may give.
@@ -78,10 +102,19 @@ const MAX_NAMED_IDS: usize = 20;
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SolveReq {
-    /// The camera's intrinsics, or the name of a stored camera whose intrinsics to use.
-    pub intrinsics: IntrinsicsRef,
-    /// What the camera sees: pixels and the world points seen there.
-    pub correspondences: Vec<CorrespondenceDto>,
+    /// From correspondences: the camera's intrinsics, or the name of a stored camera
+    /// whose intrinsics to use.
+    #[serde(default)]
+    pub intrinsics: Option<IntrinsicsRef>,
+    /// From correspondences: pixels and the world points seen there.
+    #[serde(default)]
+    pub correspondences: Option<Vec<CorrespondenceDto>>,
+    /// From an image: the picture, a base64 PNG.
+    #[serde(default)]
+    pub image: Option<String>,
+    /// From an image: the camera as far as it is known.
+    #[serde(default)]
+    pub initial: Option<CameraRef>,
     /// Store the solved camera under this name.
     #[serde(default)]
     pub store_as: Option<String>,
@@ -169,10 +202,20 @@ struct Focal {
 /// Iteration counts.
 #[derive(Debug, Serialize)]
 struct Iterations {
-    /// RANSAC samples drawn.
-    ransac: usize,
+    /// RANSAC samples drawn (from correspondences).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ransac: Option<usize>,
     /// Levenberg–Marquardt iterations.
     refine: usize,
+}
+
+/// How well the model's edges lie on the picture's (from an image).
+#[derive(Debug, Serialize)]
+struct EdgeFit {
+    /// Points sampled on the model's visible edges at the answered camera.
+    samples: usize,
+    /// The fraction of them within 2 pixels of a picture edge of their direction.
+    inlier_fraction: f64,
 }
 
 /// The answer of `POST /v1/camera-solution`.
@@ -183,12 +226,18 @@ struct Solved {
     /// RMS reprojection error over the inliers, pixels.
     rms_px: f64,
     /// Indices of the inlier correspondences, ascending.
-    inliers: Vec<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    inliers: Option<Vec<usize>>,
     /// Number of correspondences given.
-    correspondences: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    correspondences: Option<usize>,
     iterations: Iterations,
     /// Whether RANSAC stopped at its confidence rather than its iteration limit.
-    confident: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    confident: Option<bool>,
+    /// From an image: how the model's edges lie on the picture's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    edges: Option<EdgeFit>,
     /// The focal length, when it was solved.
     #[serde(skip_serializing_if = "Option::is_none")]
     focal: Option<Focal>,
@@ -235,6 +284,25 @@ fn solve_problem(e: SolveError) -> Problem {
         SolveError::DidNotConverge { .. } => {
             unprocessable("did-not-converge", "The solve did not converge", detail)
         }
+        SolveError::ImageChannels { .. }
+        | SolveError::ImageSamples { .. }
+        | SolveError::ImageSizeMismatch { .. } => {
+            unprocessable("invalid-image", "Invalid image", detail)
+        }
+        SolveError::BadCamera(_) => unprocessable("invalid-camera", "Invalid camera", detail),
+        SolveError::NoImageEdges => {
+            unprocessable("no-image-edges", "The image shows no edges", detail)
+        }
+        SolveError::NoEdgesVisible { .. } => unprocessable(
+            "model-not-in-view",
+            "Too little of the model is in view",
+            detail,
+        ),
+        SolveError::TooFewInliers { .. } => unprocessable(
+            "image-does-not-match",
+            "The image does not show the model from near the camera",
+            detail,
+        ),
     }
 }
 
@@ -286,8 +354,8 @@ impl SolveReq {
     }
 
     /// The intrinsics, from the request or the world's camera.
-    fn intrinsics(&self, world: &World) -> Result<Intrinsics, Problem> {
-        match &self.intrinsics {
+    fn intrinsics(given: &IntrinsicsRef, world: &World) -> Result<Intrinsics, Problem> {
+        match given {
             IntrinsicsRef::Named(name) => world
                 .camera(name)
                 .map(|c| c.intrinsics)
@@ -302,8 +370,11 @@ impl SolveReq {
     /// The world points and pixels, vertices read from `world`. Refused when a
     /// correspondence has neither or both of `vertex` and `point` (400), or names a vertex
     /// the model does not have (422, every such id named).
-    fn pairs(&self, world: &World) -> Result<(Vec<DVec3>, Vec<DVec2>), Problem> {
-        let n = self.correspondences.len();
+    fn pairs(
+        correspondences: &[CorrespondenceDto],
+        world: &World,
+    ) -> Result<(Vec<DVec3>, Vec<DVec2>), Problem> {
+        let n = correspondences.len();
         if n > MAX_CORRESPONDENCES {
             return Err(unprocessable(
                 "too-many-correspondences",
@@ -312,7 +383,7 @@ impl SolveReq {
             ));
         }
         let mut ids = Vec::new();
-        for (i, c) in self.correspondences.iter().enumerate() {
+        for (i, c) in correspondences.iter().enumerate() {
             match (c.vertex, c.point) {
                 (Some(v), None) => ids.push(Serial(v)),
                 (None, Some(_)) => {}
@@ -350,7 +421,7 @@ impl SolveReq {
         let mut loci = found.into_iter().flatten().map(|(_, _, p)| p);
         let mut points = Vec::with_capacity(n);
         let mut pixels = Vec::with_capacity(n);
-        for c in &self.correspondences {
+        for c in correspondences {
             let p = match c.point {
                 Some(p) => DVec3::from_array(p),
                 None => loci.next().ok_or_else(|| {
@@ -375,6 +446,60 @@ fn camera_matrix(k: &Intrinsics) -> [[f64; 3]; 3] {
     ]
 }
 
+/// What a request asks for, checked for exactly one of the two forms.
+enum Form<'a> {
+    /// Correspondences with intrinsics.
+    Correspondences(&'a IntrinsicsRef, &'a [CorrespondenceDto]),
+    /// A picture and the rough camera that took it.
+    Image(&'a str, &'a CameraRef),
+}
+
+impl SolveReq {
+    /// The form asked for: 400 unless the request holds exactly one form whole, and only
+    /// the options that form takes.
+    fn form(&self) -> Result<Form<'_>, Problem> {
+        match (
+            &self.intrinsics,
+            &self.correspondences,
+            &self.image,
+            &self.initial,
+        ) {
+            (Some(k), Some(c), None, None) => Ok(Form::Correspondences(k, c)),
+            (None, None, Some(image), Some(initial)) => {
+                let ransac = [
+                    ("threshold_px", self.threshold_px.is_some()),
+                    ("confidence", self.confidence.is_some()),
+                    ("max_iterations", self.max_iterations.is_some()),
+                    ("min_inliers", self.min_inliers.is_some()),
+                    ("seed", self.seed.is_some()),
+                    ("solve_focal", self.solve_focal),
+                ];
+                match ransac.iter().find(|(_, given)| *given) {
+                    Some((name, _)) => Err(Problem::bad_request(format!(
+                        "{name} is an option of solving from correspondences, not from an image"
+                    ))),
+                    None => Ok(Form::Image(image, initial)),
+                }
+            }
+            _ => Err(Problem::bad_request(
+                "give either \"intrinsics\" and \"correspondences\", or \"image\" and \"initial\"",
+            )),
+        }
+    }
+}
+
+/// A solved camera and how it was found, before it is answered.
+struct Outcome {
+    camera: Camera,
+    rms_px: f64,
+    inliers: Option<Vec<usize>>,
+    correspondences: Option<usize>,
+    iterations: Iterations,
+    confident: Option<bool>,
+    focal: Option<Focal>,
+    edges: Option<EdgeFit>,
+}
+
 /// `POST /v1/camera-solution`.
 pub(super) async fn camera_solution(
     State(state): State<AppState>,
@@ -382,7 +507,7 @@ pub(super) async fn camera_solution(
     req: Result<Json<SolveReq>, JsonRejection>,
 ) -> Answer {
     let Json(req) = req.map_err(|e| Problem::bad_request(e.body_text()))?;
-    let options = req.options()?;
+    let form = req.form()?;
     if let Some(name) = &req.store_as {
         // Solving only reads the world; storing the camera writes it.
         let role = role.map_or(Role::Admin, |Extension(r)| r);
@@ -401,14 +526,83 @@ pub(super) async fn camera_solution(
             .map_err(|reason| Problem::bad_request(format!("store_as {name:?}: {reason}")))?;
     }
     let world = snapshot(&state.handle).await?;
-    let intrinsics = req.intrinsics(&world)?;
-    let (points, pixels) = req.pairs(&world)?;
-    let _turn = state
+    let outcome = match form {
+        Form::Correspondences(k, list) => {
+            from_correspondences(&state, &req, &world, k, list).await?
+        }
+        Form::Image(image, initial) => from_image(&state, world.clone(), image, initial).await?,
+    };
+    let camera = outcome.camera;
+    let intrinsics = camera.intrinsics;
+    let dto = IntrinsicsDto {
+        width: intrinsics.width,
+        height: intrinsics.height,
+        fx: intrinsics.fx,
+        fy: intrinsics.fy,
+        cx: intrinsics.cx,
+        cy: intrinsics.cy,
+    };
+    let mut revision = world.revision();
+    if let Some(name) = &req.store_as {
+        let put = Edit::PutCamera {
+            name: name.clone(),
+            camera: CameraReq {
+                pose: Some(camera.pose.into()),
+                look_at: None,
+                intrinsics: Some(dto),
+                baumgart: None,
+            },
+        };
+        let Applied { revision: r, .. } = state.handle.apply_if(put, None).await?;
+        revision = r;
+    }
+    let (r, t) = camera.to_opencv();
+    let answer = Solved {
+        camera: SolvedCamera {
+            pose: camera.pose.into(),
+            intrinsics: dto,
+            view_direction: camera.view_direction().to_array(),
+        },
+        opencv: OpenCv {
+            rvec: rotation_vector(&r).to_array(),
+            tvec: t.to_array(),
+            camera_matrix: camera_matrix(&intrinsics),
+        },
+        rms_px: outcome.rms_px,
+        inliers: outcome.inliers,
+        correspondences: outcome.correspondences,
+        iterations: outcome.iterations,
+        confident: outcome.confident,
+        edges: outcome.edges,
+        focal: outcome.focal,
+        stored_as: req.store_as,
+        revision,
+    };
+    Ok(([(ETAG, etag(revision))], Json(answer)).into_response())
+}
+
+/// Waits for a turn to solve: at most one solve per core at a time.
+async fn turn(state: &AppState) -> Result<OwnedSemaphorePermit, Problem> {
+    state
         .solves
         .clone()
         .acquire_owned()
         .await
-        .map_err(|_| Problem::unavailable())?;
+        .map_err(|_| Problem::unavailable())
+}
+
+/// The camera from correspondences ([`solve_pnp`] or [`solve_pnp_focal`]).
+async fn from_correspondences(
+    state: &AppState,
+    req: &SolveReq,
+    world: &World,
+    given: &IntrinsicsRef,
+    list: &[CorrespondenceDto],
+) -> Result<Outcome, Problem> {
+    let options = req.options()?;
+    let intrinsics = SolveReq::intrinsics(given, world)?;
+    let (points, pixels) = SolveReq::pairs(list, world)?;
+    let _turn = turn(state).await?;
     let started = Instant::now();
     let k = PixelIntrinsics {
         fx: intrinsics.fx,
@@ -435,7 +629,7 @@ pub(super) async fn camera_solution(
         })
         .await
         .map_err(Problem::internal)?;
-    let n = req.correspondences.len();
+    let n = list.len();
     let elapsed_ms = started.elapsed().as_secs_f64() * 1e3;
     let (solution, focal) = solved.map_err(|e| {
         tracing::info!(correspondences = n, elapsed_ms, error = %e, "camera solution refused");
@@ -463,50 +657,86 @@ pub(super) async fn camera_solution(
         intrinsics,
     )
     .map_err(Problem::internal)?;
-    let dto = IntrinsicsDto {
-        width: intrinsics.width,
-        height: intrinsics.height,
-        fx: intrinsics.fx,
-        fy: intrinsics.fy,
-        cx: intrinsics.cx,
-        cy: intrinsics.cy,
-    };
-    let mut revision = world.revision();
-    if let Some(name) = &req.store_as {
-        let put = Edit::PutCamera {
-            name: name.clone(),
-            camera: CameraReq {
-                pose: Some(camera.pose.into()),
-                look_at: None,
-                intrinsics: Some(dto),
-                baumgart: None,
-            },
-        };
-        let Applied { revision: r, .. } = state.handle.apply_if(put, None).await?;
-        revision = r;
-    }
-    let answer = Solved {
-        camera: SolvedCamera {
-            pose: camera.pose.into(),
-            intrinsics: dto,
-            view_direction: camera.view_direction().to_array(),
-        },
-        opencv: OpenCv {
-            rvec: solution.rvec.to_array(),
-            tvec: solution.tvec.to_array(),
-            camera_matrix: camera_matrix(&intrinsics),
-        },
+    Ok(Outcome {
+        camera,
         rms_px: solution.rms_px,
-        inliers: solution.inliers,
-        correspondences: n,
+        inliers: Some(solution.inliers),
+        correspondences: Some(n),
         iterations: Iterations {
-            ransac: solution.ransac_iterations,
+            ransac: Some(solution.ransac_iterations),
             refine: solution.refine_iterations,
         },
-        confident: solution.confident,
+        confident: Some(solution.confident),
         focal,
-        stored_as: req.store_as,
-        revision,
+        edges: None,
+    })
+}
+
+/// The camera from a picture and a rough camera ([`align_to_image`]).
+async fn from_image(
+    state: &AppState,
+    world: Arc<World>,
+    image: &str,
+    initial: &CameraRef,
+) -> Result<Outcome, Problem> {
+    let start = match initial {
+        CameraRef::Named(name) => *world
+            .camera(name)
+            .ok_or_else(|| Problem::not_found(format!("no camera is named {name:?}")))?,
+        CameraRef::Inline(req) => req
+            .to_camera()
+            .map_err(|e| unprocessable("invalid-camera", "Invalid camera", e.to_string()))?,
     };
-    Ok(([(ETAG, etag(revision))], Json(answer)).into_response())
+    let png = BASE64.decode(image.trim()).map_err(|e| {
+        Problem::new(
+            StatusCode::BAD_REQUEST,
+            "invalid-image",
+            "Invalid image",
+            format!("image: not base64 ({e})"),
+        )
+    })?;
+    let _turn = turn(state).await?;
+    let appearance = state.appearance.clone();
+    let started = Instant::now();
+    let aligned = tokio::task::spawn_blocking(move || {
+        let decoded = decode_png(&png, &ImageLimits::default()).map_err(Problem::from)?;
+        let luma = Luma::from_samples(
+            decoded.width,
+            decoded.height,
+            decoded.channels,
+            &decoded.pixels,
+        )
+        .map_err(solve_problem)?;
+        let scene = appearance.scene(&world);
+        align_to_image(&scene, &start, &luma, &AlignOptions::default()).map_err(|e| {
+            tracing::info!(error = %e, "camera alignment refused");
+            solve_problem(e)
+        })
+    })
+    .await
+    .map_err(Problem::internal)??;
+    tracing::info!(
+        samples = aligned.samples,
+        inlier_fraction = aligned.inlier_fraction,
+        rms_px = aligned.rms_px,
+        iterations = aligned.iterations,
+        elapsed_ms = started.elapsed().as_secs_f64() * 1e3,
+        "camera aligned to an image"
+    );
+    Ok(Outcome {
+        camera: aligned.camera,
+        rms_px: aligned.rms_px,
+        inliers: None,
+        correspondences: None,
+        iterations: Iterations {
+            ransac: None,
+            refine: aligned.iterations,
+        },
+        confident: None,
+        focal: None,
+        edges: Some(EdgeFit {
+            samples: aligned.samples,
+            inlier_fraction: aligned.inlier_fraction,
+        }),
+    })
 }
