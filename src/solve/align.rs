@@ -424,7 +424,7 @@ fn sample_edges(
     for piece in hidden_lines(scene, &view) {
         let length = piece.a.distance(piece.b);
         let n = (length / spacing_px).floor();
-        if !(n >= 1.0) {
+        if !(n.is_finite() && n >= 1.0) {
             continue;
         }
         let [da, db] = piece.depth;
@@ -687,7 +687,9 @@ impl Matcher<'_> {
             let length = along.length();
             // The image edge runs along perp(n), so |perp(n)·along|/|along| =
             // |n × along|/|along| is the |cosine| of the angle between the two directions.
-            if !(length > 0.0) || normal.perp_dot(along).abs() < self.min_cos * length {
+            if !(length.is_finite() && length > 0.0)
+                || normal.perp_dot(along).abs() < self.min_cos * length
+            {
                 continue;
             }
             matches.push(Match {

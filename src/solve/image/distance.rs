@@ -185,8 +185,8 @@ impl Envelope {
             let g = rows[q].abs_diff(y as u32) as f64;
             g * g + (q * q) as f64
         };
-        for q in 0..w {
-            if rows[q] == NO_SITE {
+        for (q, &row) in rows.iter().enumerate() {
+            if row == NO_SITE {
                 continue;
             }
             let hq = height(q);
