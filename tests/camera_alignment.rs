@@ -10,44 +10,8 @@ use base64::Engine as _;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
-use support::TestServer;
+use support::{Rng, TestServer};
 use winged::model::{Camera, Intrinsics};
-
-/// SplitMix64 with Box–Muller normals.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn uniform(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn normal(&mut self) -> f64 {
-        let u = self.uniform().max(1e-300);
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * self.uniform()).cos()
-    }
-
-    fn unit_vector(&mut self) -> DVec3 {
-        loop {
-            let v = DVec3::new(
-                2.0 * self.uniform() - 1.0,
-                2.0 * self.uniform() - 1.0,
-                2.0 * self.uniform() - 1.0,
-            );
-            let n = v.length();
-            if n > 0.1 && n <= 1.0 {
-                return v / n;
-            }
-        }
-    }
-}
 
 /// A camera 2 m from the blocks on the demo table, 640 × 480, f = 600.
 fn truth() -> Camera {

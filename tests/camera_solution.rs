@@ -7,34 +7,9 @@ mod support;
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
 use serde_json::{Value, json};
-use support::TestServer;
+use support::{Rng, TestServer};
 use winged::model::solids::mkcube;
 use winged::model::{BodyId, Camera, Intrinsics, Pose, Serial, World};
-
-/// A small deterministic random stream (SplitMix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    fn uniform(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Standard normal (Box–Muller).
-    fn normal(&mut self) -> f64 {
-        let u = self.uniform().max(1e-300);
-        let v = self.uniform();
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    }
-}
 
 /// A scene: boxes of different sizes scattered over a table-sized area, and the camera
 /// `truth` looking at them from 3 m.

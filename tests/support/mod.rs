@@ -224,3 +224,43 @@ pub fn check_topology_dump(t: &Value, handles: i64) {
     let (nf, ne, nv) = (fs.len() as i64, edges.len() as i64, vs.len() as i64);
     assert_eq!(nf - ne + nv, 2 * (1 - handles), "F−E+V of {nf}/{ne}/{nv}");
 }
+
+/// A small deterministic random stream (SplitMix64, Box–Muller normals): the same
+/// numbers for a seed on every machine.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Standard normal.
+    pub fn normal(&mut self) -> f64 {
+        let u = self.uniform().max(1e-300);
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * self.uniform()).cos()
+    }
+
+    /// Uniform on the unit sphere.
+    pub fn unit_vector(&mut self) -> glam::DVec3 {
+        loop {
+            let v = glam::DVec3::new(
+                2.0 * self.uniform() - 1.0,
+                2.0 * self.uniform() - 1.0,
+                2.0 * self.uniform() - 1.0,
+            );
+            let n = v.length();
+            if n > 0.1 && n <= 1.0 {
+                return v / n;
+            }
+        }
+    }
+}
