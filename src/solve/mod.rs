@@ -46,6 +46,7 @@ pub mod p3p;
 pub mod pnp;
 pub mod ransac;
 pub mod refine;
+mod small;
 pub mod sqpnp;
 #[cfg(test)]
 mod testing;
