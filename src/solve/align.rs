@@ -29,10 +29,9 @@
 //!    distance transform gives the nearest edge pixel, with sub-pixel position `e` and
 //!    unit normal `n`. The match is kept when `|p − e|` is at most
 //!    [`AlignOptions::capture_px`] ([`AlignOptions::match_px`] on the finest of several
-//!    levels) and the image edge runs within
-//!    [`AlignOptions::max_angle_deg`] of the model edge's projected direction (a shadow
-//!    boundary across an edge does not count); its residual is the point-to-line
-//!    distance `r = n·(p − e)`.
+//!    levels) and the image edge runs within [`AlignOptions::max_angle_deg`] of the model
+//!    edge's projected direction (a shadow boundary across an edge does not count); its
+//!    residual is the point-to-line distance `r = n·(p − e)`.
 //! 4. **Pose.** As in ICP, matching and moving alternate. The cost of the matches,
 //!    `½·Σ ρ(r²)` with the robust [`Loss`] ρ in pixels of the level, is lowered by a
 //!    Levenberg–Marquardt step over the six degrees of freedom, the rotation on SO(3) as in
@@ -49,8 +48,9 @@
 //!    of the picture, so the matching distance and the loss scale reach that much
 //!    farther, and small or close edges merge. The finest level starts within a pixel or
 //!    two of the answer and matches only nearby edges, so that an edge the model does not
-//!    show (a shadow, the far side of a table leg) cannot pull the answer off. A start 2° and 5 cm off at 2 m (15–35
-//!    pixels at f = 600) is a few pixels at the coarsest of three levels.
+//!    show (a shadow, the far side of a table leg) cannot pull the answer off. A start 2°
+//!    and 5 cm off at 2 m (15–35 pixels at f = 600) is a few pixels at the coarsest of
+//!    three levels.
 //!
 //! # What is trusted
 //!
