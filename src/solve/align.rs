@@ -29,10 +29,9 @@
 //!    distance transform gives the nearest edge pixel, with sub-pixel position `e` and
 //!    unit normal `n`. The match is kept when `|p − e|` is at most
 //!    [`AlignOptions::capture_px`] ([`AlignOptions::match_px`] on the finest of several
-//!    levels) and the image edge runs within
-//!    [`AlignOptions::max_angle_deg`] of the model edge's projected direction (a shadow
-//!    boundary across an edge does not count); its residual is the point-to-line
-//!    distance `r = n·(p − e)`.
+//!    levels) and the image edge runs within [`AlignOptions::max_angle_deg`] of the model
+//!    edge's projected direction (a shadow boundary across an edge does not count); its
+//!    residual is the point-to-line distance `r = n·(p − e)`.
 //! 4. **Pose.** As in ICP, matching and moving alternate. The cost of the matches,
 //!    `½·Σ ρ(r²)` with the robust [`Loss`] ρ in pixels of the level, is lowered by a
 //!    Levenberg–Marquardt step over the six degrees of freedom, the rotation on SO(3) as in
@@ -49,8 +48,9 @@
 //!    of the picture, so the matching distance and the loss scale reach that much
 //!    farther, and small or close edges merge. The finest level starts within a pixel or
 //!    two of the answer and matches only nearby edges, so that an edge the model does not
-//!    show (a shadow, the far side of a table leg) cannot pull the answer off. A start 2° and 5 cm off at 2 m (15–35
-//!    pixels at f = 600) is a few pixels at the coarsest of three levels.
+//!    show (a shadow, the far side of a table leg) cannot pull the answer off. A start 2°
+//!    and 5 cm off at 2 m (15–35 pixels at f = 600) is a few pixels at the coarsest of
+//!    three levels.
 //!
 //! # What is trusted
 //!
@@ -67,6 +67,7 @@ use glam::{DMat3, DQuat, DVec2, DVec3};
 use nalgebra::{Matrix6, Vector6};
 
 use super::SolveError;
+use super::damping::{DampedStep, Damping};
 use super::image::{EdgeMap, EdgeOptions, Luma};
 use super::refine::Loss;
 use crate::camera::{Camera, DEFAULT_NEAR, Intrinsics, View};
@@ -542,7 +543,7 @@ impl Level {
         let mut samples = draw(&pose)?;
         let mut matches = matcher.associate(&samples, pose);
         let mut current = matcher.fit(&matches, pose, true);
-        let (mut mu, mut nu) = (1e-3, 2.0);
+        let mut damping = Damping::new();
         let mut iterations = 0;
         let mut since_drawn = 0;
         let mut converged = false;
@@ -558,15 +559,10 @@ impl Level {
             }
             iterations += 1;
             since_drawn += 1;
-            let (h, g) = (&current.hessian, &current.gradient);
-            let largest = h.diagonal().max();
-            let diagonal = Vector6::from_fn(|i, _| h[(i, i)].max(1e-12 * largest));
-            let damped = h + Matrix6::from_diagonal(&(diagonal * mu));
-            let step = damped.cholesky().map(|c| -c.solve(g));
-            let Some(step) = step.filter(|s| s.iter().all(|v| v.is_finite())) else {
-                mu *= nu;
-                nu *= 2.0;
-                if mu > 1e30 {
+            let Some(DampedStep { step, predicted }) =
+                damping.step(&current.hessian, &current.gradient)
+            else {
+                if !damping.reject() {
                     break;
                 }
                 continue;
@@ -578,16 +574,8 @@ impl Level {
             }
             let actual = current.cost - matcher.fit(&matches, next, false).cost;
             if actual > 0.0 {
-                // Predicted decrease of the quadratic model: ½·δᵀ(μ·D·δ − g).
-                let predicted = 0.5 * step.dot(&(step.component_mul(&diagonal) * mu - g));
-                let gain = if predicted > 0.0 {
-                    actual / predicted
-                } else {
-                    1.0
-                };
-                mu *= (1.0 - (2.0 * gain - 1.0).powi(3)).max(1.0 / 3.0);
-                nu = 2.0;
-                let flat = mu < 1.0 && actual <= COST_ROUNDING * current.cost;
+                damping.accept(actual, predicted);
+                let flat = damping.is_light() && actual <= COST_ROUNDING * current.cost;
                 pose = next;
                 matches = matcher.associate(&samples, pose);
                 current = matcher.fit(&matches, pose, true);
@@ -595,12 +583,8 @@ impl Level {
                     converged = true;
                     break;
                 }
-            } else {
-                mu *= nu;
-                nu *= 2.0;
-                if mu > 1e30 {
-                    break;
-                }
+            } else if !damping.reject() {
+                break;
             }
         }
         Ok(LevelOutcome {

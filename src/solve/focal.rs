@@ -32,6 +32,7 @@ use glam::{DMat3, DVec2, DVec3};
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector};
 
 use super::pnp::{PnpOptions, PnpSolution, rotation_vector};
+use super::sampler::Sampler;
 use super::{CvPose, Degeneracy, MIN_CONSENSUS, SolveError, check_pairs};
 
 /// World points whose smallest spread (singular value of the centred points) is below
@@ -210,7 +211,7 @@ pub fn solve_pnp_focal(
     let mut sample = vec![0usize; sample_size];
     while iterations < needed_iterations.min(options.max_iterations) {
         iterations += 1;
-        rng.sample(n, &mut sample);
+        rng.distinct(n, &mut sample);
         let hypothesis = if shape.planar() {
             from_homography(&problem, &sample, &shape)
         } else {
@@ -724,37 +725,6 @@ fn focal_spread(problem: &Problem<'_>, m: &Model, inliers: &[usize], rms_px: f64
     (var.is_finite() && var >= 0.0).then(|| var.sqrt())
 }
 
-/// Uniform samples of distinct indices (SplitMix64 with Lemire's bounded draw).
-struct Sampler(u64);
-
-impl Sampler {
-    fn new(seed: u64) -> Sampler {
-        Sampler(seed)
-    }
-
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Fills `out` with distinct indices in `0..n`, uniformly over such sets
-    /// (`out.len() ≤ n`), by rejection of repeats (the sets are small).
-    fn sample(&mut self, n: usize, out: &mut [usize]) {
-        for k in 0..out.len() {
-            loop {
-                let i = ((u128::from(self.next_u64()) * n as u128) >> 64) as usize;
-                if !out[..k].contains(&i) {
-                    out[k] = i;
-                    break;
-                }
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -979,18 +949,5 @@ mod tests {
         let mut rng = Rng(6);
         let s = scene(&mut rng, 60, 650.0, 1.0, 0.5, 0.3);
         assert_eq!(solve(&s, 3.0), solve(&s, 3.0));
-    }
-
-    #[test]
-    fn samples_are_distinct() {
-        let mut s = Sampler::new(9);
-        let mut out = [0usize; 6];
-        for _ in 0..1000 {
-            s.sample(7, &mut out);
-            let mut sorted = out;
-            sorted.sort_unstable();
-            assert!(sorted.windows(2).all(|w| w[0] < w[1]), "{out:?}");
-            assert!(out.iter().all(|&i| i < 7));
-        }
     }
 }

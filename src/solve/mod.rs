@@ -40,12 +40,14 @@
 //! inside only for the decompositions and solves glam does not have.
 
 pub mod align;
+mod damping;
 pub mod focal;
 pub mod image;
 pub mod p3p;
 pub mod pnp;
 pub mod ransac;
 pub mod refine;
+mod sampler;
 mod small;
 pub mod sqpnp;
 #[cfg(test)]

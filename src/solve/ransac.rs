@@ -41,6 +41,7 @@ use glam::{DVec2, DVec3};
 
 use super::p3p::p3p;
 use super::refine::{Loss, RefineOptions, refine_pose};
+use super::sampler::Sampler;
 use super::{CvPose, Degeneracy, SolveError, check_pairs};
 
 /// The fewest correspondences [`ransac_pnp`] accepts, and the smallest consensus it will
@@ -218,7 +219,7 @@ pub fn ransac_pnp(
         observed,
         tau2: options.threshold * options.threshold,
     };
-    let mut rng = Rng::new(options.seed);
+    let mut rng = Sampler::new(options.seed);
     let mut best: Option<(CvPose, Score)> = None;
     let mut degenerate: Option<Degeneracy> = None;
     let mut iterations = 0;
@@ -428,53 +429,6 @@ impl Scorer<'_> {
             }
         }
         best
-    }
-}
-
-/// The sampler: xorshift64* (Vigna), its state seeded through SplitMix64 so that every
-/// seed, 0 included, gives a non-zero state.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Rng {
-        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        Rng(if z == 0 { 0x2545_F491_4F6C_DD1D } else { z })
-    }
-
-    fn next_u64(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x >> 12;
-        x ^= x << 25;
-        x ^= x >> 27;
-        self.0 = x;
-        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    /// Uniform in `0..n` (Lemire's multiply-shift; the bias is below 2⁻⁴⁰ for any slice
-    /// that fits in memory). `n ≥ 1`.
-    fn below(&mut self, n: usize) -> usize {
-        ((u128::from(self.next_u64()) * n as u128) >> 64) as usize
-    }
-
-    /// Three distinct indices in `0..n`, uniformly over all such triples. `n ≥ 3`.
-    fn sample3(&mut self, n: usize) -> [usize; 3] {
-        let a = self.below(n);
-        let mut b = self.below(n - 1);
-        if b >= a {
-            b += 1;
-        }
-        let (lo, hi) = (a.min(b), a.max(b));
-        let mut c = self.below(n - 2);
-        if c >= lo {
-            c += 1;
-        }
-        if c >= hi {
-            c += 1;
-        }
-        [a, b, c]
     }
 }
 
@@ -802,25 +756,5 @@ mod tests {
         // Another seed draws other samples, and the answer is (nearly) the same camera.
         let other = ransac_pnp(&s.world, &s.observed, &RansacOptions { seed: 43, ..opts }).unwrap();
         assert!(other.pose.rotation_angle_to(&first.pose).to_degrees() < 0.05);
-    }
-
-    #[test]
-    fn samples_are_three_distinct_uniform_indices() {
-        let mut rng = Rng::new(0);
-        let mut counts = [0usize; 5];
-        for _ in 0..30_000 {
-            let [a, b, c] = rng.sample3(5);
-            assert!(a != b && b != c && a != c && a < 5 && b < 5 && c < 5);
-            for i in [a, b, c] {
-                counts[i] += 1;
-            }
-        }
-        // Each index is in 3/5 of the samples: 18,000 expected, σ ≈ 85.
-        assert!(
-            counts.iter().all(|&k| k.abs_diff(18_000) < 600),
-            "{counts:?}"
-        );
-        assert_eq!(Rng::new(3).next_u64(), Rng::new(3).next_u64());
-        assert_ne!(Rng::new(3).next_u64(), Rng::new(4).next_u64());
     }
 }

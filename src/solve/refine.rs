@@ -31,6 +31,7 @@
 use glam::{DMat3, DQuat, DVec2, DVec3};
 use nalgebra::{Matrix6, Vector6};
 
+use super::damping::{DampedStep, Damping};
 use super::{CvPose, SolveError, check_pairs};
 
 /// The fewest correspondences [`refine_pose`] accepts (six unknowns, two equations each).
@@ -217,8 +218,7 @@ pub fn refine_pose(
     let mut q = DQuat::from_mat3(&initial.rotation).normalize();
     let mut t = initial.translation;
     let mut current = problem.evaluate(q, t, true);
-    let mut mu = 1e-3;
-    let mut nu = 2.0;
+    let mut damping = Damping::new();
     let mut iterations = 0;
     let mut converged = false;
     if !current.cost.is_finite() {
@@ -232,21 +232,15 @@ pub fn refine_pose(
             converged = true;
             break;
         }
-        let (h, g) = (&current.hessian, &current.gradient);
-        let diagonal = Vector6::from_fn(|i, _| h[(i, i)].max(1e-12 * h.diagonal().max()));
         iterations += 1;
-        let damped = h + Matrix6::from_diagonal(&(diagonal * mu));
-        let Some(step) = damped.cholesky().map(|c| -c.solve(g)) else {
-            mu *= nu;
-            nu *= 2.0;
-            if mu > 1e30 {
+        let Some(DampedStep { step, predicted }) =
+            damping.step(&current.hessian, &current.gradient)
+        else {
+            if !damping.reject() {
                 break;
             }
             continue;
         };
-        if step.iter().any(|v| !v.is_finite()) {
-            break;
-        }
         let omega = DVec3::new(step[0], step[1], step[2]);
         let dt = DVec3::new(step[3], step[4], step[5]);
         if omega.length() <= tol && dt.length() <= tol * (1.0 + t.length()) {
@@ -256,30 +250,18 @@ pub fn refine_pose(
         let q_next = (DQuat::from_scaled_axis(omega) * q).normalize();
         let t_next = t + dt;
         let trial = problem.evaluate(q_next, t_next, true);
-        // Predicted decrease of the (reweighted) quadratic model: ½·δᵀ(μ·D·δ − g).
-        let predicted = 0.5 * step.dot(&(step.component_mul(&diagonal) * mu - g));
         let actual = current.cost - trial.cost;
         // A change at the level of rounding while the step is still close to Gauss–Newton's
         // (not a short step forced by heavy damping): nothing left to gain.
-        let flat = mu < 1.0 && actual.abs() <= COST_ROUNDING * current.cost;
+        let flat = damping.is_light() && actual.abs() <= COST_ROUNDING * current.cost;
         if trial.cost.is_finite() && actual > 0.0 {
-            let gain = if predicted > 0.0 {
-                actual / predicted
-            } else {
-                1.0
-            };
-            mu *= (1.0 - (2.0 * gain - 1.0).powi(3)).max(1.0 / 3.0);
-            nu = 2.0;
+            damping.accept(actual, predicted);
             (q, t, current) = (q_next, t_next, trial);
-        } else {
-            mu *= nu;
-            nu *= 2.0;
+        } else if !damping.reject() {
+            break;
         }
         if flat {
             converged = true;
-            break;
-        }
-        if mu > 1e30 {
             break;
         }
     }

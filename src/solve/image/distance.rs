@@ -191,19 +191,21 @@ impl Envelope {
             }
             let hq = height(q);
             loop {
-                let Some(&v) = self.columns.last() else {
+                let (Some(&v), Some(&bound)) = (self.columns.last(), self.bounds.last()) else {
                     self.columns.push(q as u32);
                     self.bounds.push(f64::NEG_INFINITY);
                     break;
                 };
                 let v = v as usize;
-                let s = (hq - height(v)) / (2.0 * (q - v) as f64);
-                if s <= *self.bounds.last().unwrap_or(&f64::NEG_INFINITY) {
+                // The parabolas of v and q cross at s = (hq − hv)/(2(q − v)); q > v, so
+                // s ≤ bound compares without dividing.
+                let (rise, run) = (hq - height(v), 2.0 * (q - v) as f64);
+                if rise <= bound * run {
                     self.columns.pop();
                     self.bounds.pop();
                 } else {
                     self.columns.push(q as u32);
-                    self.bounds.push(s);
+                    self.bounds.push(rise / run);
                     break;
                 }
             }
