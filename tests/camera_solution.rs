@@ -158,6 +158,7 @@ fn vertices_and_points_seen_by_a_camera_give_it_back_despite_wrong_matches() {
     let right: Vec<usize> = (0..sc.seen.len()).filter(|i| !wrong.contains(i)).collect();
     assert_eq!(inliers, right, "{a}");
     assert_eq!(a["correspondences"], sc.seen.len());
+    // With wrong matches among them, RANSAC ran.
     assert!(a["iterations"]["ransac"].as_u64().expect("ransac") >= 1);
     assert_eq!(
         a["camera"]["intrinsics"],

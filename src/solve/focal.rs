@@ -16,6 +16,9 @@
 //!     largest), four of them, and the plane-to-image homography `H ≃ diag(f, f, 1)·[r₁ r₂
 //!     t]`, from which `1/f²` is the least-squares root of the two constraints `r₁·r₂ = 0`
 //!     and `|r₁| = |r₂|` (Zhang's, with the principal point known).
+//!
+//!   When there are at most [`EXHAUSTIVE_SAMPLES`] distinct minimal sets (six to eight
+//!   points in space, up to seven on a plane), each is tried once instead.
 //! * **Scoring** counts the correspondences within `threshold_px` in pixels.
 //! * **Local optimisation** of every new best, and the final answer: Levenberg–Marquardt
 //!   over the rotation (left-multiplied rotation-vector steps), the translation and
@@ -32,8 +35,13 @@ use glam::{DMat3, DVec2, DVec3};
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector};
 
 use super::pnp::{PnpOptions, PnpSolution, rotation_vector};
-use super::sampler::Sampler;
+use super::sampler::{Sampler, next_subset, subsets_up_to};
 use super::{CvPose, Degeneracy, MIN_CONSENSUS, SolveError, check_pairs};
+
+/// When there are at most this many distinct minimal samples, each is tried once (in
+/// order) instead of drawing samples at random: with six correspondences there is only
+/// one, and random draws would repeat it up to `max_iterations` times.
+const EXHAUSTIVE_SAMPLES: usize = 64;
 
 /// World points whose smallest spread (singular value of the centred points) is below
 /// this fraction of the largest are taken as planar.
@@ -202,16 +210,21 @@ pub fn solve_pnp_focal(
         aspect,
     };
 
-    // LO-RANSAC.
+    // LO-RANSAC; or, when there are few distinct samples, every one of them in turn.
     let n = world.len();
+    let exhaustive = subsets_up_to(n, sample_size, EXHAUSTIVE_SAMPLES);
     let mut rng = Sampler::new(options.seed);
     let mut best: Option<(Model, usize, f64)> = None;
-    let mut needed_iterations = options.max_iterations;
+    let mut needed_iterations = exhaustive.unwrap_or(options.max_iterations);
     let mut iterations = 0;
-    let mut sample = vec![0usize; sample_size];
+    let mut sample: Vec<usize> = (0..sample_size).collect();
     while iterations < needed_iterations.min(options.max_iterations) {
+        if exhaustive.is_none() {
+            rng.distinct(n, &mut sample);
+        } else if iterations > 0 && !next_subset(n, &mut sample) {
+            break;
+        }
         iterations += 1;
-        rng.distinct(n, &mut sample);
         let hypothesis = if shape.planar() {
             from_homography(&problem, &sample, &shape)
         } else {
@@ -238,8 +251,10 @@ pub fn solve_pnp_focal(
                 best = Some((refined, c, k));
             }
         }
-        let w = best.as_ref().map_or(0, |b| b.1) as f64 / n as f64;
-        needed_iterations = iterations_needed(w, sample_size, options.confidence);
+        if exhaustive.is_none() {
+            let w = best.as_ref().map_or(0, |b| b.1) as f64 / n as f64;
+            needed_iterations = iterations_needed(w, sample_size, options.confidence);
+        }
     }
     let confident = iterations >= needed_iterations;
     let Some((model, count, _)) = best else {
@@ -808,6 +823,25 @@ mod tests {
             ..PnpOptions::default()
         };
         solve_pnp_focal(&s.world, &s.pixels, s.principal, s.fy / s.fx, &options)
+    }
+
+    #[test]
+    fn few_points_are_tried_as_every_minimal_set_once() {
+        let mut rng = Rng(17);
+        // Six exact points: one minimal set, one iteration, the true camera.
+        let s = scene(&mut rng, 6, 800.0, 1.0, 0.0, 0.0);
+        let out = solve(&s, 2.0).expect("a camera");
+        assert_eq!(out.solution.ransac_iterations, 1);
+        assert!(out.solution.confident);
+        assert!((out.fx - 800.0).abs() < 1e-6 * 800.0, "{}", out.fx);
+        // Eight points, one of them wrong: at most C(8, 6) = 28 sets, and the wrong one
+        // is left out.
+        let mut s = scene(&mut rng, 8, 800.0, 1.0, 0.0, 0.0);
+        s.pixels[3] += DVec2::new(30.0, 20.0);
+        let out = solve(&s, 2.0).expect("a camera");
+        assert!(out.solution.ransac_iterations <= 28);
+        assert_eq!(out.solution.inliers, [0, 1, 2, 4, 5, 6, 7]);
+        assert!(out.solution.pose.rotation_angle_to(&s.pose) < 1e-6);
     }
 
     #[test]

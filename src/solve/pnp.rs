@@ -1,9 +1,11 @@
 //! The camera from 2D–3D correspondences in pixels, start to finish: pixels to
-//! normalised coordinates with known intrinsics, LO-RANSAC around P3P for the consensus
-//! ([`ransac_pnp`]), the global SQPnP solve on the consensus ([`sqpnp()`], kept when it
-//! reprojects the consensus better than RANSAC's camera), then Levenberg–Marquardt with a
-//! robust loss on the consensus ([`refine_pose`]), the inliers counted again with the
-//! refined pose, and the answer in pixels and in OpenCV's `rvec`/`tvec`.
+//! normalised coordinates with known intrinsics; the global SQPnP solve of all the
+//! correspondences ([`sqpnp()`]), which is the consensus when it fits every one of them
+//! within the threshold (no outlier: RANSAC is skipped); otherwise LO-RANSAC around P3P
+//! for the consensus ([`ransac_pnp`]) and the global solve on it (kept when it reprojects
+//! the consensus better than RANSAC's camera); then Levenberg–Marquardt with a robust loss
+//! on the consensus ([`refine_pose`]), the inliers counted again with the refined pose,
+//! and the answer in pixels and in OpenCV's `rvec`/`tvec`.
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
 
@@ -64,7 +66,9 @@ impl PixelIntrinsics {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PnpOptions {
     /// Reprojection error, in pixels, up to which a correspondence is an inlier
-    /// (default 4).
+    /// (default 8, as OpenCV's `solvePnPRansac`: four deviations of 2 px noise, so that
+    /// a genuine match is kept with probability 0.9997; wrong matches are seldom within
+    /// that distance of where their point is seen).
     pub threshold_px: f64,
     /// Confidence that RANSAC has drawn an all-inlier sample when it stops (default
     /// 0.999).
@@ -80,7 +84,7 @@ pub struct PnpOptions {
 impl Default for PnpOptions {
     fn default() -> Self {
         PnpOptions {
-            threshold_px: 4.0,
+            threshold_px: 8.0,
             confidence: 0.999,
             max_iterations: 10_000,
             min_inliers: 6,
@@ -102,11 +106,13 @@ pub struct PnpSolution {
     pub rms_px: f64,
     /// Indices of the inliers, ascending.
     pub inliers: Vec<usize>,
-    /// RANSAC iterations.
+    /// RANSAC iterations: 0 when the global solve of all the correspondences fitted every
+    /// one of them, so that there was no outlier to look for.
     pub ransac_iterations: usize,
     /// Levenberg–Marquardt iterations.
     pub refine_iterations: usize,
-    /// Whether RANSAC stopped at its confidence (rather than at `max_iterations`).
+    /// Whether the consensus is trusted: RANSAC stopped at its confidence (rather than at
+    /// `max_iterations`), or every correspondence agreed with the global solve.
     pub confident: bool,
 }
 
@@ -138,36 +144,47 @@ pub fn solve_pnp(
     }
     let observed: Vec<DVec2> = pixels.iter().map(|&p| k.normalise(p)).collect();
     let threshold = options.threshold_px / k.focal();
+    let needed = options.min_inliers.max(super::MIN_CONSENSUS);
     let mut ransac = RansacOptions::new(threshold);
     ransac.confidence = options.confidence;
     ransac.max_iterations = options.max_iterations;
     ransac.min_iterations = ransac.min_iterations.min(options.max_iterations);
     ransac.min_inliers = options.min_inliers;
     ransac.seed = options.seed;
-    let consensus = ransac_pnp(world, &observed, &ransac)?;
-
-    let (w, m): (Vec<DVec3>, Vec<DVec2>) = consensus
-        .inliers
-        .iter()
-        .map(|&i| (world[i], observed[i]))
-        .unzip();
-    // The global optimum of the consensus, when it fits it better than the sample's camera
-    // (a degenerate consensus leaves RANSAC's camera as it is).
-    let squared_error = |pose: &CvPose| -> f64 {
-        w.iter()
-            .zip(&m)
-            .map(|(&x, &o)| {
-                pose.project(x)
-                    .map_or(f64::INFINITY, |q| (q - o).length_squared())
-            })
-            .sum()
-    };
-    let start = match sqpnp(&w, &m, None) {
-        Ok(global) if squared_error(&global.best.pose) < squared_error(&consensus.pose) => {
-            global.best.pose
-        }
-        _ => consensus.pose,
-    };
+    ransac.validate()?;
+    // The camera to refine, the consensus it rests on, and how it was found.
+    let (start, w, m, ransac_iterations, confident) =
+        match everyone_agrees(world, &observed, pixels, k, options) {
+            Some(start) => (start, world.to_vec(), observed, 0, true),
+            None => {
+                let consensus = ransac_pnp(world, &observed, &ransac)?;
+                let (w, m): (Vec<DVec3>, Vec<DVec2>) = consensus
+                    .inliers
+                    .iter()
+                    .map(|&i| (world[i], observed[i]))
+                    .unzip();
+                // The global optimum of the consensus, when it fits it better than the
+                // sample's camera (a degenerate consensus leaves RANSAC's camera as it is).
+                let squared_error = |pose: &CvPose| -> f64 {
+                    w.iter()
+                        .zip(&m)
+                        .map(|(&x, &o)| {
+                            pose.project(x)
+                                .map_or(f64::INFINITY, |q| (q - o).length_squared())
+                        })
+                        .sum()
+                };
+                let start = match sqpnp(&w, &m, None) {
+                    Ok(global)
+                        if squared_error(&global.best.pose) < squared_error(&consensus.pose) =>
+                    {
+                        global.best.pose
+                    }
+                    _ => consensus.pose,
+                };
+                (start, w, m, consensus.iterations, consensus.confident)
+            }
+        };
     let refine = RefineOptions::new(Loss::Huber { scale: threshold });
     let refined = refine_pose(&start, &w, &m, &refine)?.require_converged()?;
     let pose = refined.pose;
@@ -183,7 +200,6 @@ pub fn solve_pnp(
             sum2 += e2;
         }
     }
-    let needed = options.min_inliers.max(super::MIN_CONSENSUS);
     if inliers.len() < needed {
         return Err(SolveError::NoConsensus {
             best_inliers: inliers.len(),
@@ -197,10 +213,37 @@ pub fn solve_pnp(
         pose,
         rms_px,
         inliers,
-        ransac_iterations: consensus.iterations,
+        ransac_iterations,
         refine_iterations: refined.iterations,
-        confident: consensus.confident,
+        confident,
     })
+}
+
+/// The global optimum of all the correspondences, when there are at least
+/// `options.min_inliers` of them and it puts every world point in front of the camera and
+/// within `options.threshold_px` of its pixel: then no correspondence is an outlier and
+/// the consensus is all of them. `None` otherwise (an outlier, noise beyond the threshold,
+/// or a configuration SQPnP refuses), and RANSAC looks for the consensus.
+fn everyone_agrees(
+    world: &[DVec3],
+    observed: &[DVec2],
+    pixels: &[DVec2],
+    k: &PixelIntrinsics,
+    options: &PnpOptions,
+) -> Option<CvPose> {
+    if world.len() < options.min_inliers.max(super::MIN_CONSENSUS) {
+        return None;
+    }
+    let pose = sqpnp(world, observed, None).ok()?.best.pose;
+    let limit = options.threshold_px * options.threshold_px;
+    world
+        .iter()
+        .zip(pixels)
+        .all(|(&x, &p)| {
+            pose.project(x)
+                .is_some_and(|q| (k.pixel(q) - p).length_squared() <= limit)
+        })
+        .then_some(pose)
 }
 
 /// OpenCV's `rvec` of a rotation: its axis times its angle in `[0, π]`.
@@ -256,6 +299,38 @@ mod tests {
             });
         }
         (pose, world, pixels)
+    }
+
+    #[test]
+    fn without_outliers_the_global_solve_is_the_consensus_and_ransac_is_skipped() {
+        let mut rng = Rng(31);
+        for n in [6, 10, 200] {
+            for _ in 0..20 {
+                let (truth, world, pixels) = problem(&mut rng, n, 0.5, 0);
+                let s = solve_pnp(&world, &pixels, &K, &PnpOptions::default()).expect("a camera");
+                assert_eq!(s.ransac_iterations, 0, "n = {n}");
+                assert!(s.confident);
+                assert_eq!(s.inliers, (0..n).collect::<Vec<_>>());
+                assert!(s.pose.rotation_angle_to(&truth).to_degrees() < 1.0);
+            }
+        }
+        // One wrong match among them: RANSAC looks for the consensus, and leaves it out.
+        let (truth, world, mut pixels) = problem(&mut rng, 50, 0.5, 0);
+        pixels[7] += DVec2::new(40.0, -25.0);
+        let s = solve_pnp(&world, &pixels, &K, &PnpOptions::default()).expect("a camera");
+        assert!(s.ransac_iterations >= 1);
+        assert!(!s.inliers.contains(&7) && s.inliers.len() == 49);
+        assert!(s.pose.rotation_angle_to(&truth).to_degrees() < 0.2);
+        // Options out of range are refused even where RANSAC would not run.
+        let (_, world, pixels) = problem(&mut rng, 20, 0.5, 0);
+        let bad = PnpOptions {
+            confidence: 1.5,
+            ..PnpOptions::default()
+        };
+        assert!(matches!(
+            solve_pnp(&world, &pixels, &K, &bad),
+            Err(SolveError::BadParameter { .. })
+        ));
     }
 
     #[test]

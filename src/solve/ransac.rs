@@ -118,7 +118,8 @@ impl RansacOptions {
         }
     }
 
-    fn validate(&self) -> Result<(), SolveError> {
+    /// Refuses options out of their ranges with [`SolveError::BadParameter`].
+    pub(super) fn validate(&self) -> Result<(), SolveError> {
         let bad = |what, value| Err(SolveError::BadParameter { what, value });
         if !(self.threshold.is_finite() && self.threshold > 0.0) {
             return bad("the inlier threshold", self.threshold);

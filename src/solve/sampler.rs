@@ -65,6 +65,40 @@ impl Sampler {
     }
 }
 
+/// The number of `k`-element subsets of `n` things, when it is at most `cap`; `None` when
+/// there are more.
+pub(super) fn subsets_up_to(n: usize, k: usize, cap: usize) -> Option<usize> {
+    if k > n {
+        return Some(0);
+    }
+    let k = k.min(n - k);
+    // C(n, i) = C(n, i − 1)·(n − i + 1)/i, exact at every step; never above C(n, k).
+    let mut count: u128 = 1;
+    for i in 1..=k {
+        count = count * (n - i + 1) as u128 / i as u128;
+        if count > cap as u128 {
+            return None;
+        }
+    }
+    Some(count as usize)
+}
+
+/// Steps `subset` (ascending distinct indices below `n`) to the next subset of its size in
+/// lexicographic order; `false`, leaving it as it was, after the last. Starting from
+/// `0, 1, …, k − 1`, every `k`-subset is visited once.
+pub(super) fn next_subset(n: usize, subset: &mut [usize]) -> bool {
+    let k = subset.len();
+    // The rightmost entry that can still grow.
+    let Some(i) = (0..k).rev().find(|&i| subset[i] < n - k + i) else {
+        return false;
+    };
+    subset[i] += 1;
+    for j in i + 1..k {
+        subset[j] = subset[j - 1] + 1;
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,5 +142,28 @@ mod tests {
             counts.iter().all(|&k| k.abs_diff(6_000) < 200),
             "{counts:?}"
         );
+    }
+
+    #[test]
+    fn subsets_are_counted_and_each_visited_once() {
+        assert_eq!(subsets_up_to(6, 6, 100), Some(1));
+        assert_eq!(subsets_up_to(10, 6, 1000), Some(210));
+        assert_eq!(subsets_up_to(10, 6, 209), None);
+        assert_eq!(subsets_up_to(3, 4, 10), Some(0));
+        assert_eq!(
+            subsets_up_to(1000, 6, usize::MAX),
+            Some(1_368_173_298_991_500)
+        );
+        let mut subset = [0, 1, 2];
+        let mut seen = vec![subset];
+        while next_subset(7, &mut subset) {
+            assert!(subset.windows(2).all(|w| w[0] < w[1]) && subset[2] < 7);
+            seen.push(subset);
+        }
+        assert_eq!(seen.len(), 35);
+        assert_eq!(subset, [4, 5, 6]);
+        seen.sort_unstable();
+        seen.dedup();
+        assert_eq!(seen.len(), 35);
     }
 }

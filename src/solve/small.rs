@@ -91,7 +91,7 @@ fn tridiagonalise<const N: usize>(
         v[k + 1] -= alpha;
         let vv = v.iter().map(|x| x * x).sum::<f64>();
         e[k + 1] = alpha;
-        if !(vv > 0.0) {
+        if vv.is_nan() || vv <= 0.0 {
             // Already reduced: nothing to reflect.
             e[k + 1] = a[k][k + 1];
             continue;
@@ -200,7 +200,7 @@ fn ql_implicit<const N: usize>(
                 p = -s * s2 * c3 * el1 * e[l] / dl1;
                 e[l] = s * p;
                 d[l] = c * p;
-                if !(e[l].abs() > EPS * tst1) {
+                if e[l].abs() <= EPS * tst1 || e[l].is_nan() {
                     break;
                 }
             }
@@ -324,7 +324,7 @@ fn largest_eigenvector_foam(k: &[[f64; 4]; 4]) -> Option<[f64; 4]> {
     for _ in 0..FOAM_MAX_STEPS {
         let p = ((lambda * lambda + c2) * lambda + c1) * lambda + c0;
         let slope = (4.0 * lambda * lambda + 2.0 * c2) * lambda + c1;
-        if !(slope > 0.0) {
+        if slope.is_nan() || slope <= 0.0 {
             break;
         }
         let step = p / slope;
@@ -341,7 +341,7 @@ fn largest_eigenvector_foam(k: &[[f64; 4]; 4]) -> Option<[f64; 4]> {
     let (best, diagonal) = (0..4)
         .map(|i| (i, minor(&a, i, i)))
         .max_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))?;
-    if !(diagonal.abs() > FOAM_MIN_ADJUGATE) {
+    if diagonal.is_nan() || diagonal.abs() <= FOAM_MIN_ADJUGATE {
         return None;
     }
     let q: [f64; 4] = std::array::from_fn(|j| {
@@ -393,6 +393,8 @@ pub(super) fn orthonormalise(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
 }
 
 #[cfg(test)]
+// The reference routines below index matrices by row and column, as written in texts.
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
 

@@ -453,6 +453,8 @@ impl<'a> Problem<'a> {
                 *entry += (0..3).map(|k| qa[k][i] * p[k][j]).sum::<f64>();
             }
         }
+        // Exactly symmetric: the mean of each entry and its mirror.
+        #[allow(clippy::needless_range_loop)] // two indices into one matrix
         for i in 0..9 {
             for j in 0..i {
                 let mean = 0.5 * (omega[i][j] + omega[j][i]);
@@ -716,7 +718,7 @@ fn newton_polish(omega: &Mat9, rotation: [[f64; 3]; 3]) -> Vec9 {
         };
         let omega_step = DVec3::from_array(step);
         let length2 = omega_step.length_squared();
-        if !(length2 <= NEWTON_MAX_STEP * NEWTON_MAX_STEP) {
+        if length2.is_nan() || length2 > NEWTON_MAX_STEP * NEWTON_MAX_STEP {
             break;
         }
         let turned = DMat3::from_quat(DQuat::from_scaled_axis(omega_step)) * to_mat3(&r);
@@ -727,7 +729,7 @@ fn newton_polish(omega: &Mat9, rotation: [[f64; 3]; 3]) -> Vec9 {
             return next;
         }
         let next_cost = quadratic(omega, &next);
-        if !(next_cost <= cost) {
+        if next_cost.is_nan() || next_cost > cost {
             break;
         }
         (r, cost) = (next, next_cost);

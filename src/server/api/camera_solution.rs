@@ -119,7 +119,7 @@ pub struct SolveReq {
     #[serde(default)]
     pub store_as: Option<String>,
     /// Reprojection error in pixels up to which a correspondence counts as an inlier
-    /// (default 4).
+    /// (default 8).
     #[serde(default)]
     pub threshold_px: Option<f64>,
     /// RANSAC's confidence that it has drawn an all-inlier sample when it stops
