@@ -217,6 +217,9 @@ fn intrinsics_of_a_stored_camera_and_store_as() {
         a["inliers"].as_array().expect("inliers").len(),
         sc.seen.len()
     );
+    // Every correspondence fits the global solve of all of them: RANSAC was not needed.
+    assert_eq!(a["iterations"]["ransac"], 0, "{a}");
+    assert_eq!(a["confident"], true);
     assert_eq!(a["stored_as"], "solved");
     assert_eq!(a["revision"], before + 1);
     assert_eq!(

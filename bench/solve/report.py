@@ -88,7 +88,7 @@ def main():
                 f"{s}: sqpnp / cv.SQPNP median errors {rot:.3f} (rotation), "
                 f"{trans:.3f} (translation), within {WITHIN}",
             )
-    for (s, solver), r in sorted(ours.items()):
+    for (s, solver), r in sorted(ours.items(), key=lambda item: sets.index(item[0][0])):
         if solver == "focal":
             continue
         n = int(s.split("_")[0][1:])
