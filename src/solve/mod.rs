@@ -16,7 +16,8 @@
 //! * [`ransac_pnp`]: LO-RANSAC around P3P with adaptive stopping, for N ≥ 4
 //!   correspondences of which many may be wrong: the pose with the largest consensus and
 //!   its inliers, or [`SolveError::NoConsensus`].
-//! * [`solve_pnp`]: the whole solve from pixels with known intrinsics: RANSAC, then
+//! * [`solve_pnp`]: the whole solve from pixels with known intrinsics: SQPnP on all the
+//!   correspondences, taken as the consensus when it fits every one (else RANSAC), then
 //!   refinement on the consensus, the answer in pixels and in OpenCV's `rvec`/`tvec`.
 //! * [`solve_pnp_focal`]: the same with the focal length unknown (the principal point
 //!   and pixel aspect known): RANSAC over direct linear transforms (or homographies, for
@@ -37,7 +38,8 @@
 //! normalised coordinates is the caller's business, with the intrinsics it trusts.
 //!
 //! The interface uses glam's `f64` types like the rest of the crate; nalgebra is used
-//! inside only for the decompositions and solves glam does not have.
+//! inside for the decompositions and solves glam does not have, except in SQPnP's inner
+//! loops, which use the fixed-size routines of the private `small` module.
 
 pub mod align;
 mod damping;
