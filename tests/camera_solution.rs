@@ -147,8 +147,8 @@ fn vertices_and_points_seen_by_a_camera_give_it_back_despite_wrong_matches() {
     let (angle, offset) = errors(&a, &sc.truth);
     assert!(angle < 1e-6 && offset < 1e-6, "{angle}° {offset} m: {a}");
     assert!(a["rms_px"].as_f64().expect("rms") < 1e-6, "{a}");
-    // The inliers are exactly the right matches (a random pixel may fall within 4 px of
-    // where its point is seen, by chance; the seed above gives none).
+    // The inliers are exactly the right matches (a random pixel may fall within the
+    // default 8 px of where its point is seen, by chance; the seed above gives none).
     let inliers: Vec<usize> = a["inliers"]
         .as_array()
         .expect("inliers")
