@@ -24,24 +24,10 @@ use winged::server::demo::demo_world;
 use winged::solve::align::{AlignOptions, align_to_image};
 use winged::solve::image::{EdgeMap, EdgeOptions, Luma};
 
-/// A small deterministic generator (PCG-style), uniform in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (u, v) = (self.next().max(1e-300), self.next());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-    fn unit_vector(&mut self) -> DVec3 {
-        DVec3::new(self.normal(), self.normal(), self.normal()).normalize()
-    }
-}
+#[path = "../bench/rng.rs"]
+#[allow(dead_code)] // each bench uses some of its methods
+mod rng;
+use rng::Rng;
 
 /// The true camera, the scene and its noisy picture.
 fn setup() -> (Camera, Scene, Luma) {

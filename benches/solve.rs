@@ -25,24 +25,10 @@ const K: PixelIntrinsics = PixelIntrinsics {
     cy: 240.0,
 };
 
-/// A small deterministic generator (PCG-style), uniform in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-    fn normal(&mut self) -> f64 {
-        let (u, v) = (self.next().max(1e-300), self.next());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
+#[path = "../bench/rng.rs"]
+#[allow(dead_code)] // each bench uses some of its methods
+mod rng;
+use rng::Rng;
 
 /// One problem: the true camera, world points and pixels.
 struct Problem {
