@@ -699,7 +699,7 @@ fn bad_requests_are_problems_and_change_nothing() {
 #[test]
 fn concurrent_queries_see_each_revision_as_it_was() {
     use std::collections::BTreeMap;
-    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
     let s = TestServer::start();
     let a = add_box(&s, "a", [0.0; 3]);
@@ -707,12 +707,13 @@ fn concurrent_queries_see_each_revision_as_it_was() {
     let mut at: BTreeMap<u64, f64> = BTreeMap::new();
     at.insert(revision(&s), 0.0);
     let done = AtomicBool::new(false);
+    let answers = AtomicUsize::new(0);
     let url = s.url("/v1/spatial/sphere?x=0&y=0&z=0&r=0.5&detail=bodies");
     let seen: Vec<(u64, bool, String)> = std::thread::scope(|scope| {
         let askers: Vec<_> = (0..3)
             .map(|_| {
                 let agent = s.agent();
-                let (url, done) = (&url, &done);
+                let (url, done, answers) = (&url, &done, &answers);
                 scope.spawn(move || {
                     let mut seen = Vec::new();
                     while !done.load(Ordering::Relaxed) {
@@ -729,11 +730,22 @@ fn concurrent_queries_see_each_revision_as_it_was() {
                         let found = !v["bodies"].as_array().expect("bodies").is_empty();
                         assert_eq!(etag, format!("\"{rev}\""));
                         seen.push((rev, found, v.to_string()));
+                        answers.fetch_add(1, Ordering::Relaxed);
                     }
                     seen
                 })
             })
             .collect();
+        // The writes begin once every asker is under way (on a busy machine the thirty
+        // writes could otherwise all be over before the first answer).
+        let start = std::time::Instant::now();
+        while answers.load(Ordering::Relaxed) < 3 {
+            assert!(
+                start.elapsed() < std::time::Duration::from_secs(30),
+                "no answers"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
         for k in 1..=30 {
             let x = if k % 2 == 1 { 10.0 } else { 0.0 };
             let r = s.patch(
