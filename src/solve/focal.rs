@@ -387,6 +387,19 @@ impl Spread {
     }
 }
 
+/// The centroid of `points` and their mean distance from it (`length` measures a
+/// difference), for Hartley's normalisation; `None` when the points coincide or a
+/// coordinate is not finite.
+fn centre_and_spread<T>(points: &[T], length: impl Fn(T) -> f64) -> Option<(T, f64)>
+where
+    T: Copy + std::iter::Sum + std::ops::Sub<Output = T> + std::ops::Div<f64, Output = T>,
+{
+    let n = points.len() as f64;
+    let centre = points.iter().copied().sum::<T>() / n;
+    let spread = points.iter().map(|&p| length(p - centre)).sum::<f64>() / n;
+    (spread > 0.0).then_some((centre, spread))
+}
+
 /// The projection `P` (3×4, rows) of the sample by the direct linear transform, and the
 /// camera it factors into; `None` for a degenerate sample or a camera that sees the
 /// sample from behind.
@@ -394,13 +407,8 @@ fn from_projection(problem: &Problem<'_>, sample: &[usize]) -> Option<Model> {
     // Hartley normalisation of both sides.
     let w: Vec<DVec3> = sample.iter().map(|&i| problem.world[i]).collect();
     let q: Vec<DVec2> = sample.iter().map(|&i| problem.q[i]).collect();
-    let cw = w.iter().copied().sum::<DVec3>() / w.len() as f64;
-    let sw = w.iter().map(|p| (*p - cw).length()).sum::<f64>() / w.len() as f64;
-    let cq = q.iter().copied().sum::<DVec2>() / q.len() as f64;
-    let sq = q.iter().map(|p| (*p - cq).length()).sum::<f64>() / q.len() as f64;
-    if !(sw > 0.0 && sq > 0.0) {
-        return None;
-    }
+    let (cw, sw) = centre_and_spread(&w, DVec3::length)?;
+    let (cq, sq) = centre_and_spread(&q, DVec2::length)?;
     let (kw, kq) = (3f64.sqrt() / sw, 2f64.sqrt() / sq);
     let mut a = DMatrix::<f64>::zeros(2 * w.len(), 12);
     for (k, (p, m)) in w.iter().zip(&q).enumerate() {
@@ -474,13 +482,8 @@ fn from_homography(problem: &Problem<'_>, sample: &[usize], plane: &Spread) -> O
     };
     let w: Vec<DVec2> = sample.iter().map(|&i| on_plane(problem.world[i])).collect();
     let q: Vec<DVec2> = sample.iter().map(|&i| problem.q[i]).collect();
-    let cw = w.iter().copied().sum::<DVec2>() / w.len() as f64;
-    let sw = w.iter().map(|p| (*p - cw).length()).sum::<f64>() / w.len() as f64;
-    let cq = q.iter().copied().sum::<DVec2>() / q.len() as f64;
-    let sq = q.iter().map(|p| (*p - cq).length()).sum::<f64>() / q.len() as f64;
-    if !(sw > 0.0 && sq > 0.0) {
-        return None;
-    }
+    let (cw, sw) = centre_and_spread(&w, DVec2::length)?;
+    let (cq, sq) = centre_and_spread(&q, DVec2::length)?;
     let (kw, kq) = (2f64.sqrt() / sw, 2f64.sqrt() / sq);
     let mut a = DMatrix::<f64>::zeros(2 * w.len(), 9);
     for (k, (p, m)) in w.iter().zip(&q).enumerate() {
