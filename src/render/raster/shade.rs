@@ -50,9 +50,13 @@
 //! cache lines, with a pyramid of per-block maxima and minima beside it. A run of pixels
 //! of one face along a row sees the map along a segment, so one look at the pyramid
 //! usually settles the whole run (all lit or all in shadow), and only runs that cross a
-//! shadow's edge are tested pixel by pixel. The pixels are lit band by band as soon as
-//! the z-buffer's band is drawn, while it is in the cache.
+//! shadow's edge are tested pixel by pixel. Before that, a kept map has settled each
+//! face as a whole where it can (made once with the map, `SunMap::classify`): a face
+//! the sun sees entirely, or not at all, needs no test at any of its pixels. The pixels
+//! are lit band by band as soon as the z-buffer's band is drawn, while it is in the cache.
 
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
 use glam::{DMat3, DVec3};
@@ -192,7 +196,8 @@ pub fn shaded(scene: &Scene, view: &View, shading: &Shading) -> RgbImage {
 }
 
 /// [`shaded`], testing runs of at least `run` pixels of one face for shadow as a whole
-/// (`usize::MAX`: every pixel on its own).
+/// (`usize::MAX`: every pixel on its own, also of the faces a kept sun map has classified
+/// as a whole).
 pub(super) fn shaded_with(scene: &Scene, view: &View, shading: &Shading, run: usize) -> RgbImage {
     let (width, height) = view.size();
     let (w, h) = (width as usize, height as usize);
@@ -535,7 +540,20 @@ struct Lighter<'a> {
     palette: bool,
     /// Runs of a face's pixels at least this long are tested for shadow as a whole.
     run: usize,
+    /// Faces the kept sun maps have classified as a whole ([`SunMap::classify`]) are not
+    /// tested pixel by pixel.
+    classified: bool,
+    /// Unique to this lighter (never 0), so that palettes made for another are not used.
+    id: u64,
 }
+
+thread_local! {
+    /// Each thread's palettes, reused by every lighter that runs on it.
+    static PALETTES: RefCell<Palettes> = RefCell::new(Palettes::new());
+}
+
+/// The next [`Lighter::id`].
+static LIGHTERS: AtomicU64 = AtomicU64::new(1);
 
 impl<'a> Lighter<'a> {
     fn new(
@@ -560,6 +578,8 @@ impl<'a> Lighter<'a> {
             palette: lamps.len() <= PALETTE_SUNS
                 && lamps.iter().all(|l| matches!(l, Lamp::Sun { .. })),
             run,
+            classified: run != usize::MAX,
+            id: LIGHTERS.fetch_add(1, Ordering::Relaxed),
         }
     }
 
@@ -578,7 +598,27 @@ impl<'a> Lighter<'a> {
     /// Lights rows from `y0`, `width` pixels wide, of depths `depth` and faces `face`,
     /// into `out` (RGB).
     fn rows(&self, y0: usize, width: usize, depth: &[f32], face: &[u32], out: &mut [u8]) {
-        let mut palettes = self.palette.then(Palettes::new);
+        if self.palette {
+            // Each thread keeps its palettes from band to band and picture to picture.
+            PALETTES.with(|kept| match kept.try_borrow_mut() {
+                Ok(mut p) => self.rows_with(y0, width, depth, face, out, Some(&mut p)),
+                Err(_) => self.rows_with(y0, width, depth, face, out, Some(&mut Palettes::new())),
+            });
+        } else {
+            self.rows_with(y0, width, depth, face, out, None);
+        }
+    }
+
+    /// [`Lighter::rows`], with `palettes` when every lamp is a sun ([`Lighter::palette`]).
+    fn rows_with(
+        &self,
+        y0: usize,
+        width: usize,
+        depth: &[f32],
+        face: &[u32],
+        out: &mut [u8],
+        mut palettes: Option<&mut Palettes>,
+    ) {
         for (r, ((depths, faces), out)) in depth
             .chunks(width)
             .zip(face.chunks(width))
@@ -668,10 +708,7 @@ impl<'a> Lighter<'a> {
         let mut x = 0;
         while x < faces.len() {
             let f = faces[x];
-            let end = faces[x + 1..]
-                .iter()
-                .position(|&g| g != f)
-                .map_or(faces.len(), |p| x + 1 + p);
+            let end = run_end(faces, x);
             let run = &mut out[x * 3..end * 3];
             if f == NO_FACE {
                 fill_rgb(run, self.background);
@@ -680,12 +717,17 @@ impl<'a> Lighter<'a> {
             }
             let slot = palettes.slot(self, f);
             let prep = palettes.prep[slot];
+            let (lit, dark) = palettes.sure[slot];
             // Suns known to see the whole run, and those to be asked pixel by pixel.
             let (mut seen, mut ask) = (0u8, 0u8);
             let first = (x as f64 + 0.5, py, depths[x] as f64);
             let last = ((end - 1) as f64 + 0.5, py, depths[end - 1] as f64);
             for (k, (lamp, &(gain, bias))) in self.lamps.iter().zip(&prep).enumerate() {
-                if gain <= 0.0 {
+                if gain <= 0.0 || dark & (1 << k) != 0 {
+                    continue;
+                }
+                if lit & (1 << k) != 0 {
+                    seen |= 1 << k;
                     continue;
                 }
                 let whole = match lamp {
@@ -727,14 +769,40 @@ impl<'a> Lighter<'a> {
     }
 }
 
-/// Fills `run` (RGB pixels) with `colour`.
+/// The end of the run of equal values in `faces` that starts at `x`: the first index past
+/// `x` holding another value, or `faces.len()`. Precondition: `x < faces.len()`.
+#[inline]
+fn run_end(faces: &[u32], x: usize) -> usize {
+    const LANES: usize = 8;
+    let f = faces[x];
+    let mut i = x + 1;
+    // Eight at a time, which the compiler turns into one vector comparison.
+    while let Some(chunk) = faces.get(i..i + LANES) {
+        let mut other = 0u32;
+        for (k, &g) in chunk.iter().enumerate() {
+            other |= u32::from(g != f) << k;
+        }
+        if other != 0 {
+            return i + other.trailing_zeros() as usize;
+        }
+        i += LANES;
+    }
+    while i < faces.len() && faces[i] == f {
+        i += 1;
+    }
+    i
+}
+
+/// Fills `run` (RGB pixels) with `colour`: eight pixels at a time as three 8-byte words.
 #[inline]
 fn fill_rgb(run: &mut [u8], colour: [u8; 3]) {
-    let [r, g, b] = colour;
-    let four = [r, g, b, r, g, b, r, g, b, r, g, b];
-    let mut chunks = run.chunks_exact_mut(12);
+    let word = |o: usize| u64::from_ne_bytes(std::array::from_fn(|i| colour[(o + i) % 3]));
+    let words = [word(0), word(8), word(16)];
+    let mut chunks = run.chunks_exact_mut(24);
     for c in &mut chunks {
-        c.copy_from_slice(&four);
+        for (part, w) in c.chunks_exact_mut(8).zip(words) {
+            part.copy_from_slice(&w.to_ne_bytes());
+        }
     }
     for o in chunks.into_remainder().chunks_exact_mut(3) {
         o.copy_from_slice(&colour);
@@ -748,12 +816,18 @@ const MARK_CHUNK: usize = 64;
 /// ([`Sight::run`]).
 const RUN: usize = 6;
 
-/// Faces' palettes, kept while a band of rows is lit: direct-mapped by face index.
+/// Faces' palettes: direct-mapped by face index, each kept by one thread ([`PALETTES`])
+/// for the rows it lights, tagged with the [`Lighter`] they were made for.
 struct Palettes {
-    /// The face in each slot, [`NO_FACE`] for none.
+    /// The [`Lighter::id`] each slot was made for (0: none).
+    owner: Vec<u64>,
+    /// The face in each slot.
     face: Vec<u32>,
     /// Each sun's [`Lamp::prepare`] for the slot's face.
     prep: Vec<[(f64, f64); PALETTE_SUNS]>,
+    /// The suns that see the whole of the slot's face (bit k for sun k), and those that see
+    /// none of it, as their kept maps say ([`SunMap::classify`]).
+    sure: Vec<(u8, u8)>,
     /// The face's base colour (linear).
     base: Vec<[f32; 3]>,
     /// The face's colour for each set of suns that see it (bit k for sun k), made when
@@ -769,8 +843,10 @@ impl Palettes {
 
     fn new() -> Palettes {
         Palettes {
+            owner: vec![0; Self::SLOTS],
             face: vec![NO_FACE; Self::SLOTS],
             prep: vec![[(0.0, 0.0); PALETTE_SUNS]; Self::SLOTS],
+            sure: vec![(0, 0); Self::SLOTS],
             base: vec![[0.0; 3]; Self::SLOTS],
             colour: vec![[[0; 3]; 1 << PALETTE_SUNS]; Self::SLOTS],
             made: vec![0; Self::SLOTS],
@@ -782,13 +858,27 @@ impl Palettes {
     #[inline]
     fn slot(&mut self, lighter: &Lighter<'_>, f: u32) -> usize {
         let slot = f as usize % Self::SLOTS;
-        if self.face[slot] != f {
+        if self.face[slot] != f || self.owner[slot] != lighter.id {
             self.face[slot] = f;
+            self.owner[slot] = lighter.id;
             let face = &lighter.scene.faces[f as usize];
             self.base[slot] = lighter.bases[face.body as usize];
             for (p, lamp) in self.prep[slot].iter_mut().zip(lighter.lamps) {
                 *p = lamp.prepare(face.normal);
             }
+            let (mut lit, mut dark) = (0u8, 0u8);
+            if lighter.classified {
+                for (k, lamp) in lighter.lamps.iter().enumerate() {
+                    if let Lamp::Sun { map: Some(m), .. } = lamp {
+                        match m.map.face(f) {
+                            FACE_LIT => lit |= 1 << k,
+                            FACE_DARK => dark |= 1 << k,
+                            _ => {}
+                        }
+                    }
+                }
+            }
+            self.sure[slot] = (lit, dark);
             self.made[slot] = 0;
         }
         slot
@@ -972,6 +1062,16 @@ impl Projection for Ortho {
 
     #[inline]
     fn plane(&self, f: &SceneFace) -> [f64; 3] {
+        self.key_plane(f)
+    }
+}
+
+impl Ortho {
+    /// The key plane `[a, b, c]` of face `f`: key = a·u + b·v + c at texel coordinates
+    /// (u, v). Precondition: the face is not edge-on to the sun (`f.normal · w ≠ 0`), else
+    /// the values are infinite or NaN.
+    #[inline]
+    fn key_plane(&self, f: &SceneFace) -> [f64; 3] {
         let nw = f.normal.dot(self.w);
         let (ns, nt) = (f.normal.dot(self.s), f.normal.dot(self.t));
         // On the plane, w·p = (offset − ns·X − nt·Y)/nw with X = u/scale + x0, Y = v/scale + y0.
@@ -1008,6 +1108,50 @@ struct SunMap {
     eps: f64,
     /// Where the map looks from.
     view: Ortho,
+    /// Per face of the scene, what the map says of the whole face ([`FACE_LIT`],
+    /// [`FACE_DARK`] or [`FACE_ASK`]; see [`SunMap::classify`]). Empty for a map fitted
+    /// to one picture: then every face is asked about pixel by pixel.
+    faces: Vec<u8>,
+}
+
+/// [`SunMap::faces`]: the sun sees every point of the face.
+const FACE_LIT: u8 = 1;
+/// [`SunMap::faces`]: the sun sees no point of the face.
+const FACE_DARK: u8 = 2;
+/// [`SunMap::faces`]: the face's pixels must be asked about (or the face is turned away
+/// from the sun, which then gives it nothing anyway).
+const FACE_ASK: u8 = 0;
+
+/// Texels of a face's box past which [`SunMap::classify`] leaves it to the pixels (a kept
+/// map has at most [`KEPT_SUN_SIDE`]² texels, so only a face seen edge-on by the sun
+/// reaches this).
+const CLASSIFY_TEXELS: usize = 1 << 21;
+
+/// Texels by which [`SunMap::classify`] widens a face, to cover the rounding of the
+/// points its pixels show.
+const WIDEN: f64 = 0.5;
+
+/// The least and greatest `u` of the polygon `ring` (a closed loop of (u, v) points) over
+/// the slab `lo ≤ v ≤ hi`, or `None` when it does not reach into the slab. The extremes of
+/// a polygon within a slab lie on its edges, so the edges clipped to the slab give them.
+fn slab_extent(ring: &[[f64; 2]], lo: f64, hi: f64) -> Option<(f64, f64)> {
+    let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (i, &[ua, va]) in ring.iter().enumerate() {
+        let [ub, vb] = ring[(i + 1) % ring.len()];
+        let (vmin, vmax) = (va.min(vb), va.max(vb));
+        if vmax < lo || vmin > hi {
+            continue;
+        }
+        if va == vb {
+            (min, max) = (min.min(ua.min(ub)), max.max(ua.max(ub)));
+            continue;
+        }
+        // The edge's u at heights lo and hi, clamped to the edge.
+        let at = |y: f64| ua + (ub - ua) * ((y - va) / (vb - va)).clamp(0.0, 1.0);
+        let (x0, x1) = (at(lo.max(vmin)), at(hi.min(vmax)));
+        (min, max) = (min.min(x0.min(x1)), max.max(x0.max(x1)));
+    }
+    (min <= max).then_some((min, max))
 }
 
 impl SunMap {
@@ -1030,13 +1174,15 @@ impl SunMap {
         if !(footprint[0] <= footprint[1] && footprint[2] <= footprint[3]) {
             return None;
         }
-        SunMap::new(
+        let mut map = SunMap::new(
             scene,
             direction,
             footprint,
             KEPT_SUN_SIDE,
             &mut Scratch::default(),
-        )
+        )?;
+        map.faces = map.classify(scene);
+        Some(map)
     }
 
     /// The map of the sun shining along unit `direction` over the light-space box
@@ -1089,9 +1235,106 @@ impl SunMap {
             texel,
             eps: diag * 2e-6 + unit,
             view,
+            faces: Vec::new(),
         };
         map.pyramid = Pyramid::new(&map);
         Some(map)
+    }
+
+    /// What this map says of each face of `scene` as a whole, so that a picture need not
+    /// test the face's pixels one by one: [`FACE_LIT`] when every pixel showing the face
+    /// passes [`Sight::lit_at`] with the face's bias ([`Lamp::prepare`]), [`FACE_DARK`]
+    /// when none does, else [`FACE_ASK`] (always for a face turned away from the sun or
+    /// seen edge-on, and for one whose box covers more than [`CLASSIFY_TEXELS`] texels).
+    ///
+    /// A pixel showing the face shows a point of the face's plane, which lies in a texel of
+    /// the face's light-space box widened by one texel (the widening covers the rounding of
+    /// the pixel's depth), or off the map, where it is lit. In texel T that point's key is
+    /// at least the least key of the plane over T, and at most the greatest. So the face is
+    /// lit if every texel of the box holds a key no nearer the sun than the plane's least
+    /// key over it plus the bias, with `margin` to spare for the rounding of the pixel's
+    /// key; and dark if every texel lies on the map and holds one nearer than the plane's
+    /// greatest key plus the bias, again with the margin. A convex body's own far side lies
+    /// behind each of its faces' planes, so only other bodies make a face [`FACE_ASK`].
+    fn classify(&self, scene: &Scene) -> Vec<u8> {
+        let view = self.view;
+        let toward = -view.w;
+        let margin = 8.0 * self.unit;
+        scene
+            .faces
+            .par_iter()
+            .with_min_len(256)
+            .map(|face| {
+                let nl = face.normal.dot(toward);
+                let ring = &scene.rings[face.ring.start as usize..face.ring.end as usize];
+                if nl.is_nan() || nl <= 1e-6 || ring.is_empty() {
+                    return FACE_ASK;
+                }
+                let bias = self.texel * bias_texels(nl) + self.eps;
+                let uv: Vec<[f64; 2]> = ring
+                    .iter()
+                    .map(|&i| view.point(scene.points[i as usize]))
+                    .collect();
+                let b = uv.iter().fold(EMPTY, |b, &[u, v]| union(b, [u, u, v, v]));
+                if !(b[0].is_finite() && b[1].is_finite() && b[2].is_finite() && b[3].is_finite()) {
+                    return FACE_ASK;
+                }
+                let (w, h) = (self.width as f64, self.height as f64);
+                let on_map = b[0] - WIDEN >= 0.0
+                    && b[2] - WIDEN >= 0.0
+                    && b[1] + WIDEN < w
+                    && b[3] + WIDEN < h;
+                let (v0, v1) = (
+                    (b[2] - WIDEN).floor().max(0.0),
+                    (b[3] + WIDEN).floor().min(h - 1.0),
+                );
+                let texels = (b[1] - b[0] + 2.0 * WIDEN + 1.0) * (v1 - v0 + 1.0);
+                if texels > CLASSIFY_TEXELS as f64 {
+                    return FACE_ASK;
+                }
+                let [a, pb, c] = view.key_plane(face);
+                let (lo, hi) = (a.min(0.0) + pb.min(0.0), a.max(0.0) + pb.max(0.0));
+                let (mut lit, mut dark) = (true, on_map);
+                let mut v = v0;
+                while v <= v1 {
+                    // The face's points whose texel may be in row v lie in this slab.
+                    let Some((ua, ub)) = slab_extent(&uv, v - WIDEN, v + 1.0 + WIDEN) else {
+                        v += 1.0;
+                        continue;
+                    };
+                    let (u0, u1) = (
+                        (ua - WIDEN).floor().max(0.0),
+                        (ub + WIDEN).floor().min(w - 1.0),
+                    );
+                    let row = c + pb * v;
+                    let mut u = u0;
+                    while u <= u1 {
+                        let plane = row + a * u;
+                        let key = self.units_at(u as usize, v as usize) as f64 * self.unit;
+                        lit &= key <= plane + lo + bias - margin;
+                        dark &= key > plane + hi + bias + margin;
+                        u += 1.0;
+                    }
+                    if !lit && !dark {
+                        return FACE_ASK;
+                    }
+                    v += 1.0;
+                }
+                if lit {
+                    FACE_LIT
+                } else if dark {
+                    FACE_DARK
+                } else {
+                    FACE_ASK
+                }
+            })
+            .collect()
+    }
+
+    /// What the map says of face `f` as a whole ([`SunMap::classify`]).
+    #[inline]
+    fn face(&self, f: u32) -> u8 {
+        self.faces.get(f as usize).copied().unwrap_or(FACE_ASK)
     }
 
     /// The key at texel (`u`, `v`) in key units. Precondition: inside the map.
@@ -1499,6 +1742,43 @@ fn encode_one(table: &[u8], l: f32) -> u8 {
 #[cfg(test)]
 pub(super) mod testing {
     //! Shading internals the module tests check against.
+
+    use super::{Kept, PoisonError, Scene};
+
+    /// [`super::SunMap::classify`]'s answer: the sun sees the whole face.
+    pub const FACE_LIT: u8 = super::FACE_LIT;
+    /// [`super::SunMap::classify`]'s answer: the sun sees none of the face.
+    pub const FACE_DARK: u8 = super::FACE_DARK;
+
+    /// The per-face classes of the sun map kept for light `light` of `scene`, once a
+    /// picture has made it.
+    pub fn face_classes(scene: &Scene, light: usize) -> Option<Vec<u8>> {
+        let kept = scene
+            .shadows
+            .kept
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        let (_, cell) = kept.iter().find(|(l, _)| *l == light)?;
+        match cell.get()? {
+            Kept::Sun(Some(m)) => Some(m.faces.clone()),
+            _ => None,
+        }
+    }
+
+    /// [`super::run_end`].
+    pub fn run_end(faces: &[u32], x: usize) -> usize {
+        super::run_end(faces, x)
+    }
+
+    /// [`super::fill_rgb`].
+    pub fn fill_rgb(run: &mut [u8], colour: [u8; 3]) {
+        super::fill_rgb(run, colour)
+    }
+
+    /// [`super::slab_extent`].
+    pub fn slab_extent(ring: &[[f64; 2]], lo: f64, hi: f64) -> Option<(f64, f64)> {
+        super::slab_extent(ring, lo, hi)
+    }
 
     /// The 8-bit sRGB value of `color` (sRGB) times linear `light`, as [`super::shaded`]
     /// computes it.

@@ -276,6 +276,128 @@ fn a_cube_in_the_shadow_of_a_slab_is_darker_than_in_the_open() {
     assert_all_near(&shade, &top, testing::lit(color, 0.25));
 }
 
+#[test]
+fn a_kept_sun_map_settles_whole_faces_as_the_pixels_would() {
+    // The cube under the slab: the sun sees none of the cube's top and all of the slab's.
+    let sun = Light::sun(DVec3::new(0.1, 0.05, -1.0), 0.9).unwrap();
+    let (mut world, ids) = boxes(&[
+        (Pose::IDENTITY, [1.0, 1.0, 1.0]),
+        (
+            Pose::from_translation(DVec3::new(0.0, 0.0, 3.0)),
+            [6.0, 6.0, 0.2],
+        ),
+    ]);
+    world.set_light("light", sun).unwrap();
+    let scene = Scene::build(&world);
+    assert_eq!(
+        testing::face_classes(&scene, 0),
+        None,
+        "made before any picture"
+    );
+    let k = Intrinsics::centered(160, 120, 150.0).unwrap();
+    let (_, view) = view(DVec3::new(4.0, -3.5, 1.2), DVec3::ZERO, DVec3::Z, k);
+    let whole = shaded(&scene, &view, &Shading::default());
+    let classes = testing::face_classes(&scene, 0).expect("the kept map");
+    assert_eq!(classes.len(), scene.faces.len());
+    let top = |id: BodyId| {
+        let f = scene
+            .faces
+            .iter()
+            .position(|f| {
+                scene.bodies[f.body as usize].id == id && (f.normal - DVec3::Z).length() < 1e-9
+            })
+            .unwrap();
+        classes[f]
+    };
+    assert_eq!(top(ids[0]), testing::FACE_DARK);
+    assert_eq!(top(ids[1]), testing::FACE_LIT);
+    // Faces turned away from the sun are left to the pixels (which give them nothing).
+    for (f, face) in scene.faces.iter().enumerate() {
+        if face.normal.z < -0.5 {
+            assert_eq!(classes[f], 0, "face {f} turned away");
+        }
+    }
+    // And the picture is the one testing every pixel on its own.
+    let each = shade::shaded_with(&scene, &view, &Shading::default(), usize::MAX);
+    assert_eq!(whole, each);
+}
+
+#[test]
+fn whole_face_classes_leave_a_block_world_unchanged() {
+    // No floor: bodies shadow one another's sides, partly or wholly.
+    let world = crate::render::sample::blocks(300, 7).unwrap();
+    let scene = Scene::build(&world);
+    let views: Vec<View> = crate::render::sample::ring_cameras(300, 4, 320, 240)
+        .iter()
+        .map(|c| View::new(c, DEFAULT_NEAR))
+        .collect();
+    let mut settled = 0;
+    for view in &views {
+        let whole = shaded(&scene, view, &Shading::default());
+        let each = shade::shaded_with(&scene, view, &Shading::default(), usize::MAX);
+        assert_eq!(whole, each);
+    }
+    for (light, (_, sun)) in scene.lights.iter().enumerate() {
+        let Light::Sun { direction, .. } = *sun else {
+            panic!("blocks are lit by suns");
+        };
+        let classes = testing::face_classes(&scene, light).expect("a kept map");
+        let lit = classes.iter().filter(|&&c| c == testing::FACE_LIT).count();
+        let toward_sun = scene
+            .faces
+            .iter()
+            .filter(|f| f.normal.dot(-direction.normalize()) > 1e-6)
+            .count();
+        settled += lit;
+        // Not every face turned toward the sun: some are partly in another body's shadow.
+        assert!(lit < toward_sun, "{lit} of {toward_sun} faces");
+    }
+    assert!(
+        settled > scene.faces.len() / 4,
+        "only {settled} faces settled"
+    );
+}
+
+#[test]
+fn runs_of_faces_end_where_the_value_changes() {
+    let mut rng = crate::render::sample::SplitMix64::new(3);
+    for len in 1..70 {
+        let faces: Vec<u32> = (0..len).map(|_| (rng.next_u64() % 3) as u32).collect();
+        let long: Vec<u32> = (0..len).map(|i| (i / 13) as u32).collect();
+        for f in [&faces, &long] {
+            for x in 0..len {
+                let naive = (x + 1..len).find(|&i| f[i] != f[x]).unwrap_or(len);
+                assert_eq!(testing::run_end(f, x), naive, "{f:?} from {x}");
+            }
+        }
+    }
+}
+
+#[test]
+fn filling_a_run_writes_the_colour_into_every_pixel() {
+    for n in 0..50 {
+        let mut run = vec![7u8; 3 * n + 3];
+        testing::fill_rgb(&mut run[..3 * n], [1, 2, 3]);
+        for (i, px) in run.chunks(3).enumerate() {
+            let want = if i < n { [1, 2, 3] } else { [7, 7, 7] };
+            assert_eq!(px, want, "pixel {i} of {n}");
+        }
+    }
+}
+
+#[test]
+fn a_polygons_extent_over_a_slab_comes_from_its_clipped_edges() {
+    // A diamond with corners (0, 2), (2, 0), (4, 2), (2, 4).
+    let diamond = [[0.0, 2.0], [2.0, 0.0], [4.0, 2.0], [2.0, 4.0]];
+    assert_eq!(testing::slab_extent(&diamond, 1.0, 1.5), Some((0.5, 3.5)));
+    assert_eq!(testing::slab_extent(&diamond, 1.5, 2.5), Some((0.0, 4.0)));
+    assert_eq!(testing::slab_extent(&diamond, -1.0, 0.5), Some((1.5, 2.5)));
+    assert_eq!(testing::slab_extent(&diamond, 4.5, 5.0), None);
+    // A slab inside a tall rectangle, which no corner reaches.
+    let tall = [[1.0, 0.0], [3.0, 0.0], [3.0, 10.0], [1.0, 10.0]];
+    assert_eq!(testing::slab_extent(&tall, 4.0, 5.0), Some((1.0, 3.0)));
+}
+
 /// How many pixels of `a` and `b` differ by more than 2 in some channel.
 fn differing(a: &RgbImage, b: &RgbImage) -> usize {
     assert_eq!((a.width, a.height), (b.width, b.height));
