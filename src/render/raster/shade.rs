@@ -56,7 +56,7 @@
 //! are lit band by band as soon as the z-buffer's band is drawn, while it is in the cache.
 
 use std::cell::RefCell;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU8, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
 use glam::{DMat3, DVec3};
@@ -870,7 +870,7 @@ impl Palettes {
             if lighter.classified {
                 for (k, lamp) in lighter.lamps.iter().enumerate() {
                     if let Lamp::Sun { map: Some(m), .. } = lamp {
-                        match m.map.face(f) {
+                        match m.map.face(lighter.scene, f) {
                             FACE_LIT => lit |= 1 << k,
                             FACE_DARK => dark |= 1 << k,
                             _ => {}
@@ -1109,9 +1109,10 @@ struct SunMap {
     /// Where the map looks from.
     view: Ortho,
     /// Per face of the scene, what the map says of the whole face ([`FACE_LIT`],
-    /// [`FACE_DARK`] or [`FACE_ASK`]; see [`SunMap::classify`]). Empty for a map fitted
-    /// to one picture: then every face is asked about pixel by pixel.
-    faces: Vec<u8>,
+    /// [`FACE_DARK`] or [`FACE_ASK`]; see [`SunMap::classify`]), worked out when a
+    /// picture first shows the face ([`FACE_UNKNOWN`] until then). Empty for a map
+    /// fitted to one picture: then every face is asked about pixel by pixel.
+    faces: Vec<AtomicU8>,
 }
 
 /// [`SunMap::faces`]: the sun sees every point of the face.
@@ -1121,11 +1122,16 @@ const FACE_DARK: u8 = 2;
 /// [`SunMap::faces`]: the face's pixels must be asked about (or the face is turned away
 /// from the sun, which then gives it nothing anyway).
 const FACE_ASK: u8 = 0;
+/// [`SunMap::faces`]: not worked out yet.
+const FACE_UNKNOWN: u8 = 3;
 
 /// Texels of a face's box past which [`SunMap::classify`] leaves it to the pixels (a kept
 /// map has at most [`KEPT_SUN_SIDE`]² texels, so only a face seen edge-on by the sun
 /// reaches this).
 const CLASSIFY_TEXELS: usize = 1 << 21;
+
+/// Corners of a face [`SunMap::classify`] keeps on the stack.
+const SMALL_RING: usize = 16;
 
 /// Texels by which [`SunMap::classify`] widens a face, to cover the rounding of the
 /// points its pixels show.
@@ -1181,7 +1187,9 @@ impl SunMap {
             KEPT_SUN_SIDE,
             &mut Scratch::default(),
         )?;
-        map.faces = map.classify(scene);
+        map.faces = (0..scene.faces.len())
+            .map(|_| AtomicU8::new(FACE_UNKNOWN))
+            .collect();
         Some(map)
     }
 
@@ -1241,100 +1249,115 @@ impl SunMap {
         Some(map)
     }
 
-    /// What this map says of each face of `scene` as a whole, so that a picture need not
+    /// What this map says of `face` (of `scene`) as a whole, so that a picture need not
     /// test the face's pixels one by one: [`FACE_LIT`] when every pixel showing the face
     /// passes [`Sight::lit_at`] with the face's bias ([`Lamp::prepare`]), [`FACE_DARK`]
     /// when none does, else [`FACE_ASK`] (always for a face turned away from the sun or
     /// seen edge-on, and for one whose box covers more than [`CLASSIFY_TEXELS`] texels).
     ///
-    /// A pixel showing the face shows a point of the face's plane, which lies in a texel of
-    /// the face's light-space box widened by one texel (the widening covers the rounding of
-    /// the pixel's depth), or off the map, where it is lit. In texel T that point's key is
+    /// A pixel showing the face shows a point of the face's plane, which lies in a texel
+    /// the face reaches in light space when widened by [`WIDEN`] texels (the widening
+    /// covers the rounding of the pixel's depth), or off the map, where it is lit. In texel T that point's key is
     /// at least the least key of the plane over T, and at most the greatest. So the face is
     /// lit if every texel of the box holds a key no nearer the sun than the plane's least
     /// key over it plus the bias, with `margin` to spare for the rounding of the pixel's
     /// key; and dark if every texel lies on the map and holds one nearer than the plane's
     /// greatest key plus the bias, again with the margin. A convex body's own far side lies
     /// behind each of its faces' planes, so only other bodies make a face [`FACE_ASK`].
-    fn classify(&self, scene: &Scene) -> Vec<u8> {
+    fn classify(&self, scene: &Scene, face: &SceneFace) -> u8 {
         let view = self.view;
         let toward = -view.w;
         let margin = 8.0 * self.unit;
-        scene
-            .faces
-            .par_iter()
-            .with_min_len(256)
-            .map(|face| {
-                let nl = face.normal.dot(toward);
-                let ring = &scene.rings[face.ring.start as usize..face.ring.end as usize];
-                if nl.is_nan() || nl <= 1e-6 || ring.is_empty() {
-                    return FACE_ASK;
-                }
-                let bias = self.texel * bias_texels(nl) + self.eps;
-                let uv: Vec<[f64; 2]> = ring
-                    .iter()
-                    .map(|&i| view.point(scene.points[i as usize]))
-                    .collect();
-                let b = uv.iter().fold(EMPTY, |b, &[u, v]| union(b, [u, u, v, v]));
-                if !(b[0].is_finite() && b[1].is_finite() && b[2].is_finite() && b[3].is_finite()) {
-                    return FACE_ASK;
-                }
-                let (w, h) = (self.width as f64, self.height as f64);
-                let on_map = b[0] - WIDEN >= 0.0
-                    && b[2] - WIDEN >= 0.0
-                    && b[1] + WIDEN < w
-                    && b[3] + WIDEN < h;
-                let (v0, v1) = (
-                    (b[2] - WIDEN).floor().max(0.0),
-                    (b[3] + WIDEN).floor().min(h - 1.0),
-                );
-                let texels = (b[1] - b[0] + 2.0 * WIDEN + 1.0) * (v1 - v0 + 1.0);
-                if texels > CLASSIFY_TEXELS as f64 {
-                    return FACE_ASK;
-                }
-                let [a, pb, c] = view.key_plane(face);
-                let (lo, hi) = (a.min(0.0) + pb.min(0.0), a.max(0.0) + pb.max(0.0));
-                let (mut lit, mut dark) = (true, on_map);
-                let mut v = v0;
-                while v <= v1 {
-                    // The face's points whose texel may be in row v lie in this slab.
-                    let Some((ua, ub)) = slab_extent(&uv, v - WIDEN, v + 1.0 + WIDEN) else {
-                        v += 1.0;
-                        continue;
-                    };
-                    let (u0, u1) = (
-                        (ua - WIDEN).floor().max(0.0),
-                        (ub + WIDEN).floor().min(w - 1.0),
-                    );
-                    let row = c + pb * v;
-                    let mut u = u0;
-                    while u <= u1 {
-                        let plane = row + a * u;
-                        let key = self.units_at(u as usize, v as usize) as f64 * self.unit;
-                        lit &= key <= plane + lo + bias - margin;
-                        dark &= key > plane + hi + bias + margin;
-                        u += 1.0;
-                    }
-                    if !lit && !dark {
-                        return FACE_ASK;
-                    }
-                    v += 1.0;
-                }
-                if lit {
-                    FACE_LIT
-                } else if dark {
-                    FACE_DARK
-                } else {
-                    FACE_ASK
-                }
-            })
-            .collect()
+        let nl = face.normal.dot(toward);
+        let ring = &scene.rings[face.ring.start as usize..face.ring.end as usize];
+        if nl.is_nan() || nl <= 1e-6 || ring.is_empty() {
+            return FACE_ASK;
+        }
+        let bias = self.texel * bias_texels(nl) + self.eps;
+        // The corners in texel coordinates; on the stack for all but large faces.
+        let mut near = [[0.0; 2]; SMALL_RING];
+        let mut far = Vec::new();
+        let uv: &mut [[f64; 2]] = if ring.len() <= SMALL_RING {
+            &mut near[..ring.len()]
+        } else {
+            far.resize(ring.len(), [0.0; 2]);
+            &mut far
+        };
+        for (c, &i) in uv.iter_mut().zip(ring) {
+            *c = view.point(scene.points[i as usize]);
+        }
+        let uv = &*uv;
+        let b = uv.iter().fold(EMPTY, |b, &[u, v]| union(b, [u, u, v, v]));
+        if !(b[0].is_finite() && b[1].is_finite() && b[2].is_finite() && b[3].is_finite()) {
+            return FACE_ASK;
+        }
+        let (w, h) = (self.width as f64, self.height as f64);
+        let on_map =
+            b[0] - WIDEN >= 0.0 && b[2] - WIDEN >= 0.0 && b[1] + WIDEN < w && b[3] + WIDEN < h;
+        let (v0, v1) = (
+            (b[2] - WIDEN).floor().max(0.0),
+            (b[3] + WIDEN).floor().min(h - 1.0),
+        );
+        let texels = (b[1] - b[0] + 2.0 * WIDEN + 1.0) * (v1 - v0 + 1.0);
+        if texels > CLASSIFY_TEXELS as f64 {
+            return FACE_ASK;
+        }
+        let [a, pb, c] = view.key_plane(face);
+        let (lo, hi) = (a.min(0.0) + pb.min(0.0), a.max(0.0) + pb.max(0.0));
+        let (mut lit, mut dark) = (true, on_map);
+        let mut v = v0;
+        while v <= v1 {
+            // The face's points whose texel may be in row v lie in this slab.
+            let Some((ua, ub)) = slab_extent(uv, v - WIDEN, v + 1.0 + WIDEN) else {
+                v += 1.0;
+                continue;
+            };
+            let (u0, u1) = (
+                (ua - WIDEN).floor().max(0.0),
+                (ub + WIDEN).floor().min(w - 1.0),
+            );
+            let row = c + pb * v;
+            let mut u = u0;
+            while u <= u1 {
+                let plane = row + a * u;
+                let key = self.units_at(u as usize, v as usize) as f64 * self.unit;
+                lit &= key <= plane + lo + bias - margin;
+                dark &= key > plane + hi + bias + margin;
+                u += 1.0;
+            }
+            if !lit && !dark {
+                return FACE_ASK;
+            }
+            v += 1.0;
+        }
+        if lit {
+            FACE_LIT
+        } else if dark {
+            FACE_DARK
+        } else {
+            FACE_ASK
+        }
     }
 
-    /// What the map says of face `f` as a whole ([`SunMap::classify`]).
+    /// What the map says of face `f` of `scene` as a whole ([`SunMap::classify`]),
+    /// worked out on first asking. Precondition: `scene` is the scene the map was made
+    /// for. Threads asking at once may both work it out; they get the same answer.
     #[inline]
-    fn face(&self, f: u32) -> u8 {
-        self.faces.get(f as usize).copied().unwrap_or(FACE_ASK)
+    fn face(&self, scene: &Scene, f: u32) -> u8 {
+        let Some(known) = self.faces.get(f as usize) else {
+            return FACE_ASK;
+        };
+        match known.load(Ordering::Relaxed) {
+            FACE_UNKNOWN => {
+                let class = scene
+                    .faces
+                    .get(f as usize)
+                    .map_or(FACE_ASK, |face| self.classify(scene, face));
+                known.store(class, Ordering::Relaxed);
+                class
+            }
+            class => class,
+        }
     }
 
     /// The key at texel (`u`, `v`) in key units. Precondition: inside the map.
@@ -1750,8 +1773,8 @@ pub(super) mod testing {
     /// [`super::SunMap::classify`]'s answer: the sun sees none of the face.
     pub const FACE_DARK: u8 = super::FACE_DARK;
 
-    /// The per-face classes of the sun map kept for light `light` of `scene`, once a
-    /// picture has made it.
+    /// The per-face classes of the sun map kept for light `light` of `scene` (every face
+    /// worked out), once a picture has made the map.
     pub fn face_classes(scene: &Scene, light: usize) -> Option<Vec<u8>> {
         let kept = scene
             .shadows
@@ -1760,7 +1783,11 @@ pub(super) mod testing {
             .unwrap_or_else(PoisonError::into_inner);
         let (_, cell) = kept.iter().find(|(l, _)| *l == light)?;
         match cell.get()? {
-            Kept::Sun(Some(m)) => Some(m.faces.clone()),
+            Kept::Sun(Some(m)) => Some(
+                (0..m.faces.len() as u32)
+                    .map(|f| m.face(scene, f))
+                    .collect(),
+            ),
             _ => None,
         }
     }

@@ -4,8 +4,8 @@
 //! a snapshot of the world, gets the [`Scene`] of its revision (built once per revision
 //! and shared by every rendering of it), and draws on a blocking thread, outside the
 //! world's owner, so renderings run in parallel with each other and with writes. At most
-//! [`Appearance::permits`] renderings run at once; the others wait for a turn (within the
-//! request timeout).
+//! as many renderings as the machine has cores run at once; the others wait for a turn
+//! (within the request timeout).
 //!
 //! Answers carry the world revision drawn in `ETag`, and per mode:
 //! * `depth`: `X-Depth-Scale` (meters per unit) and `X-Depth-Background: 0`;

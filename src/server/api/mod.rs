@@ -1,7 +1,7 @@
 //! The HTTP surface: routes, request parsing and answers. Writes become [`Edit`]s sent to
 //! the world's owner; reads work on a snapshot.
 //!
-//! Each route is marked with the role it needs ([`reads`], [`writes`], [`admin`]); with
+//! Each route is marked with the role it needs (`reads`, `writes`, `admin` below); with
 //! tokens configured, a request without the role is refused before its handler runs.
 
 pub mod appearance;
