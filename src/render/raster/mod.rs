@@ -21,6 +21,7 @@
 
 mod fill;
 pub mod shade;
+mod sun;
 #[cfg(test)]
 mod tests;
 
