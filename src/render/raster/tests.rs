@@ -237,9 +237,9 @@ fn assert_all_near(img: &RgbImage, pixels: &[(u32, u32)], want: [u8; 3]) {
     }
 }
 
-/// A small cube at the origin, optionally under a big slab, lit by `light`; the shaded
-/// image from the side and the top face's pixels.
-fn under_slab(slab: bool, light: Light) -> (RgbImage, Vec<(u32, u32)>, [u8; 3]) {
+/// A small cube at the origin, optionally under a big slab 3 m up, lit by `light`: the
+/// world, its body ids (cube first), and a view of the cube from the side.
+fn slab_world(slab: bool, light: Light) -> (World, Vec<BodyId>, View) {
     let mut list = vec![(Pose::IDENTITY, [1.0, 1.0, 1.0])];
     if slab {
         list.push((
@@ -248,13 +248,20 @@ fn under_slab(slab: bool, light: Light) -> (RgbImage, Vec<(u32, u32)>, [u8; 3]) 
         ));
     }
     let (mut world, ids) = boxes(&list);
+    world.set_light("light", light).unwrap();
+    let k = Intrinsics::centered(160, 120, 150.0).unwrap();
+    let (_, view) = view(DVec3::new(4.0, -3.5, 1.2), DVec3::ZERO, DVec3::Z, k);
+    (world, ids, view)
+}
+
+/// [`slab_world`]'s cube in a colour: the shaded image from the side and the top face's
+/// pixels.
+fn under_slab(slab: bool, light: Light) -> (RgbImage, Vec<(u32, u32)>, [u8; 3]) {
+    let (mut world, ids, view) = slab_world(slab, light);
     world
         .set_color(ids[0], Some(Color([180, 120, 60])))
         .unwrap();
-    world.set_light("light", light).unwrap();
     let scene = Scene::build(&world);
-    let k = Intrinsics::centered(160, 120, 150.0).unwrap();
-    let (_, view) = view(DVec3::new(4.0, -3.5, 1.2), DVec3::ZERO, DVec3::Z, k);
     let frame = rasterize(&scene, &view);
     let top = face_pixels(&scene, &frame, ids[0], DVec3::Z);
     assert!(top.len() > 100, "top face barely visible: {}", top.len());
@@ -280,22 +287,13 @@ fn a_cube_in_the_shadow_of_a_slab_is_darker_than_in_the_open() {
 fn a_kept_sun_map_settles_whole_faces_as_the_pixels_would() {
     // The cube under the slab: the sun sees none of the cube's top and all of the slab's.
     let sun = Light::sun(DVec3::new(0.1, 0.05, -1.0), 0.9).unwrap();
-    let (mut world, ids) = boxes(&[
-        (Pose::IDENTITY, [1.0, 1.0, 1.0]),
-        (
-            Pose::from_translation(DVec3::new(0.0, 0.0, 3.0)),
-            [6.0, 6.0, 0.2],
-        ),
-    ]);
-    world.set_light("light", sun).unwrap();
+    let (world, ids, view) = slab_world(true, sun);
     let scene = Scene::build(&world);
     assert_eq!(
         testing::face_classes(&scene, 0),
         None,
         "made before any picture"
     );
-    let k = Intrinsics::centered(160, 120, 150.0).unwrap();
-    let (_, view) = view(DVec3::new(4.0, -3.5, 1.2), DVec3::ZERO, DVec3::Z, k);
     let whole = shaded(&scene, &view, &Shading::default());
     let classes = testing::face_classes(&scene, 0).expect("the kept map");
     assert_eq!(classes.len(), scene.faces.len());
