@@ -84,7 +84,7 @@ pub struct Options {
 impl Default for Options {
     /// White background and black ink for drawings (the background of `shaded` is a
     /// light grey-blue), shadows on, ambient 0.25, near plane at
-    /// [`DEFAULT_NEAR`](crate::camera::DEFAULT_NEAR), depth in millimetres.
+    /// [`crate::camera::DEFAULT_NEAR`], depth in millimetres.
     fn default() -> Self {
         Options {
             background: [255, 255, 255],

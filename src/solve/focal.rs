@@ -17,7 +17,7 @@
 //!     t]`, from which `1/f²` is the least-squares root of the two constraints `r₁·r₂ = 0`
 //!     and `|r₁| = |r₂|` (Zhang's, with the principal point known).
 //!
-//!   When there are at most [`EXHAUSTIVE_SAMPLES`] distinct minimal sets (six to eight
+//!   When there are at most 64 distinct minimal sets (six to eight
 //!   points in space, up to seven on a plane), each is tried once instead.
 //! * **Scoring** counts the correspondences within `threshold_px` in pixels.
 //! * **Local optimisation** of every new best, and the final answer: Levenberg–Marquardt

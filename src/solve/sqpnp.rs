@@ -138,6 +138,20 @@ impl Sym3 {
         self.zz += wx.z * x.z;
     }
 
+    /// The scatter about the mean `mean` of points whose weighted sum of `x·xᵀ` (about
+    /// any origin, the mean's too) is `self` and whose weights total `total`:
+    /// `self/total − mean·meanᵀ`.
+    fn central(self, total: f64, mean: DVec3) -> Sym3 {
+        Sym3 {
+            xx: self.xx / total - mean.x * mean.x,
+            xy: self.xy / total - mean.x * mean.y,
+            xz: self.xz / total - mean.x * mean.z,
+            yy: self.yy / total - mean.y * mean.y,
+            yz: self.yz / total - mean.y * mean.z,
+            zz: self.zz / total - mean.z * mean.z,
+        }
+    }
+
     fn to_rows(self) -> [[f64; 3]; 3] {
         [
             [self.xx, self.xy, self.xz],
@@ -303,28 +317,34 @@ impl Normalisation {
     /// [`SolveError::Degenerate`] when they coincide or lie on one line.
     fn new(world: &[DVec3], weights: Option<&[f64]>) -> Result<Normalisation, SolveError> {
         let weight = |i: usize| weights.map_or(1.0, |w| w[i]);
-        let total: f64 = weights.map_or(world.len() as f64, |w| w.iter().sum());
-        let centroid = world
-            .iter()
-            .enumerate()
-            .fold(DVec3::ZERO, |s, (i, x)| s + *x * weight(i))
-            / total;
-        let mut scatter = Sym3::default();
+        // One pass of sums about the first point of positive weight (so that equal points
+        // give exactly zero spread, and the sums stay on the scale of the spread), from
+        // which the centroid and the scatter about it follow.
+        let origin = (0..world.len())
+            .find(|&i| weight(i) > 0.0)
+            .map_or(DVec3::ZERO, |i| world[i]);
+        let (mut total, mut first, mut second) = (0.0, DVec3::ZERO, Sym3::default());
         let mut magnitude = 0.0_f64;
         for (i, x) in world.iter().enumerate() {
             let w = weight(i);
             if w > 0.0 {
-                scatter.add_outer(*x - centroid, w / total);
+                let d = *x - origin;
+                total += w;
+                first += d * w;
+                second.add_outer(d, w);
                 magnitude = magnitude.max(x.abs().max_element());
             }
         }
+        let mean = first / total;
+        let centroid = origin + mean;
+        let scatter = second.central(total, mean);
         let variance = scatter.xx + scatter.yy + scatter.zz;
         if !variance.is_finite() || !total.is_finite() {
             return Err(SolveError::NonFinite {
                 what: "world points",
             });
         }
-        if variance.sqrt() <= COINCIDENT * magnitude || variance == 0.0 {
+        if variance <= 0.0 || variance.sqrt() <= COINCIDENT * magnitude {
             return Err(SolveError::Degenerate(Degeneracy::CoincidentPoints));
         }
         let (spread, _) = symmetric_eigen(&scatter.to_rows()).ok_or(SolveError::NonFinite {
@@ -383,12 +403,23 @@ impl<'a> Problem<'a> {
         let mut xx = [Sym3::default(); 4];
         let mut xs = [DVec3::ZERO; 4];
         let mut q = [0.0; 4];
+        // The observations' weighted sums about the first one of positive weight, for their
+        // spread (equal observations give exactly zero).
+        let image_origin = (0..observed.len())
+            .find(|&i| weight(i) > 0.0)
+            .map_or(DVec2::ZERO, |i| observed[i]);
+        let (mut image_total, mut image_first, mut image_second) = (0.0, DVec2::ZERO, 0.0);
         let inverse_mean_weight = 1.0 / frame.mean_weight;
         for (i, (x, m)) in world.iter().zip(observed).enumerate() {
-            let w = weight(i) * inverse_mean_weight;
-            if w == 0.0 {
+            let weight = weight(i);
+            if weight == 0.0 {
                 continue;
             }
+            let d = *m - image_origin;
+            image_total += weight;
+            image_first += d * weight;
+            image_second += d.length_squared() * weight;
+            let w = weight * inverse_mean_weight;
             let x = frame.apply(*x);
             let f = [w, w * m.x, w * m.y, w * m.length_squared()];
             for k in 0..4 {
@@ -397,15 +428,8 @@ impl<'a> Problem<'a> {
                 q[k] += f[k];
             }
         }
-        // The weighted spread of the observations, from their mean (a second pass, so that
-        // equal observations give exactly zero).
-        let image_mean = DVec2::new(q[1], q[2]) / q[0];
-        let image_variance = observed
-            .iter()
-            .enumerate()
-            .map(|(i, m)| (*m - image_mean).length_squared() * weight(i))
-            .sum::<f64>()
-            / (q[0] * frame.mean_weight);
+        let image_mean = image_first / image_total;
+        let image_variance = image_second / image_total - image_mean.length_squared();
         if image_variance.is_nan() || image_variance <= IMAGE_SPREAD_MIN * IMAGE_SPREAD_MIN {
             return Err(SolveError::Degenerate(Degeneracy::ParallelBearings));
         }

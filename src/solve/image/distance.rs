@@ -29,7 +29,7 @@ pub const NO_SITE: u32 = u32::MAX;
 
 /// For every pixel of a `width × height` grid, the nearest *site* pixel (Euclidean
 /// distance between pixel centres) and so the distance to it. See the
-/// [module documentation](self).
+/// [image module's documentation](crate::solve::image).
 ///
 /// Invariant: `nearest.len() == width × height`, and every entry is [`NO_SITE`] (only
 /// when there are no sites) or the row-major index of a site nearest to that pixel.

@@ -40,7 +40,7 @@ use super::distance::{DistanceField, NO_SITE};
 use super::luma::Luma;
 use crate::solve::SolveError;
 
-/// How edges are told from noise (see the [module documentation](self)).
+/// How edges are told from noise (see the [image module's documentation](crate::solve::image)).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EdgeOptions {
     /// The threshold in multiples of the estimated noise of one gradient component;
@@ -88,7 +88,7 @@ pub struct Edgel {
 }
 
 /// The edges of a picture and their distance transform. See the
-/// [module documentation](self).
+/// [image module's documentation](crate::solve::image).
 ///
 /// Invariants: `at.len() == width × height`; `at[i]` is an index into `edgels` or
 /// [`NO_SITE`]; the field's sites are exactly the pixels with an edgel.
