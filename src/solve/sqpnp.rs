@@ -408,18 +408,17 @@ impl<'a> Problem<'a> {
         let image_origin = (0..observed.len())
             .find(|&i| weight(i) > 0.0)
             .map_or(DVec2::ZERO, |i| observed[i]);
-        let (mut image_total, mut image_first, mut image_second) = (0.0, DVec2::ZERO, 0.0);
+        let (mut image_first, mut image_second) = (DVec2::ZERO, 0.0);
         let inverse_mean_weight = 1.0 / frame.mean_weight;
         for (i, (x, m)) in world.iter().zip(observed).enumerate() {
-            let weight = weight(i);
-            if weight == 0.0 {
+            let given = weight(i);
+            if given == 0.0 {
                 continue;
             }
             let d = *m - image_origin;
-            image_total += weight;
-            image_first += d * weight;
-            image_second += d.length_squared() * weight;
-            let w = weight * inverse_mean_weight;
+            image_first += d * given;
+            image_second += d.length_squared() * given;
+            let w = given * inverse_mean_weight;
             let x = frame.apply(*x);
             let f = [w, w * m.x, w * m.y, w * m.length_squared()];
             for k in 0..4 {
@@ -428,6 +427,8 @@ impl<'a> Problem<'a> {
                 q[k] += f[k];
             }
         }
+        // The given weights total q₀ times their mean.
+        let image_total = q[0] * frame.mean_weight;
         let image_mean = image_first / image_total;
         let image_variance = image_second / image_total - image_mean.length_squared();
         if image_variance.is_nan() || image_variance <= IMAGE_SPREAD_MIN * IMAGE_SPREAD_MIN {

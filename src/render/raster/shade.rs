@@ -461,9 +461,7 @@ impl Lamp {
                 if nl <= 0.0 {
                     return (0.0, 0.0);
                 }
-                let bias = map
-                    .as_ref()
-                    .map_or(0.0, |m| m.map.texel * bias_texels(nl) + m.map.eps);
+                let bias = map.as_ref().map_or(0.0, |m| m.map.bias(nl));
                 (nl * intensity, bias)
             }
             Lamp::Point { .. } => (0.0, 0.0),

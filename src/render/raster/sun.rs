@@ -92,7 +92,7 @@ pub(super) struct SunMap {
     /// Texel side, meters.
     pub(super) texel: f64,
     /// Constant bias, meters (covers the f32 keys' rounding).
-    pub(super) eps: f64,
+    eps: f64,
     /// Where the map looks from.
     view: Ortho,
     /// Per face of the scene, what the map says of the whole face ([`FACE_LIT`],
@@ -236,6 +236,14 @@ impl SunMap {
         Some(map)
     }
 
+    /// The shadow bias (meters) of a surface lit at incidence cosine `nl` (> 0): the
+    /// slope-scaled part ([`bias_texels`]) in this map's texels, plus the constant part.
+    /// Every test against the map, by pixel or by face, uses this one value.
+    #[inline]
+    pub(super) fn bias(&self, nl: f64) -> f64 {
+        self.texel * bias_texels(nl) + self.eps
+    }
+
     /// What this map says of `face` (of `scene`) as a whole, so that a picture need not
     /// test the face's pixels one by one: [`FACE_LIT`] when every pixel showing the face
     /// passes [`Sight::lit_at`] with the face's bias (`Lamp::prepare`), [`FACE_DARK`]
@@ -260,7 +268,7 @@ impl SunMap {
         if nl.is_nan() || nl <= 1e-6 || ring.is_empty() {
             return FACE_ASK;
         }
-        let bias = self.texel * bias_texels(nl) + self.eps;
+        let bias = self.bias(nl);
         // The corners in texel coordinates; on the stack for all but large faces.
         let mut near = [[0.0; 2]; SMALL_RING];
         let mut far = Vec::new();
