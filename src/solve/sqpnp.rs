@@ -35,7 +35,10 @@
 //!    the constraints and `D` a basis of `J`'s null space, `y` minimises the cost in the
 //!    tangent space. The iteration stops when `|δ|² ≤ 1e-10` (the reference
 //!    implementation's test) or after 15 steps, and the result is projected on the
-//!    nearest rotation (after a sign flip if its determinant is negative).
+//!    nearest rotation (after a sign flip if its determinant is negative). A run whose
+//!    iterate comes within 1e-3 (in the rotation's entries) of a minimum an earlier run
+//!    found is on its way there and stops: with few points the null space holds several
+//!    starts, and most of their runs end at a minimum already found.
 //! 3. The SQP above converges only linearly where the cost is not zero (it leaves out the
 //!    constraints' curvature), so its stopping point can be ~1e-6 off the minimum. Up to
 //!    three Newton steps on the rotation manifold, `R ← exp([ω]×)·R` with the exact
@@ -94,6 +97,11 @@ const NEWTON_SQUARED_TOLERANCE: f64 = 1e-16;
 /// The longest Newton step (radians) taken: a longer one means the SQP did not end near a
 /// minimum, where Newton's quadratic model is not to be trusted.
 const NEWTON_MAX_STEP: f64 = 0.05;
+
+/// An SQP run whose iterate comes this close (squared sum over the rotation's entries:
+/// 1e-3 apart, about 0.06°) to a minimum already found is taken to be on its way there.
+/// Distinct local minima of `rᵀΩr` on the rotations lie much farther apart.
+const KNOWN_MINIMUM_SQUARED: f64 = 1e-6;
 
 /// Two rotations whose entries differ by less than this in squared sum are one minimum.
 const SAME_ROTATION_SQUARED: f64 = 1e-10;
@@ -590,8 +598,12 @@ impl Search<'_> {
         let Some(r0) = nearest_rotation(&rows(e)) else {
             return;
         };
-        let Some(r) = run_sqp(&self.problem.omega, flatten(&r0)) else {
+        let Some(r) = run_sqp(&self.problem.omega, flatten(&r0), &self.minima) else {
             return;
+        };
+        let r = match r {
+            Reached::Known => return,
+            Reached::New(r) => r,
         };
         let cost = self.problem.cost(&r);
         let in_front = self.problem.in_front(&r);
@@ -609,10 +621,23 @@ impl Search<'_> {
     }
 }
 
+/// Where an SQP run ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Reached {
+    /// A rotation that (locally) minimises `rᵀΩr`, its entries row by row.
+    New(Vec9),
+    /// On its way to a minimum already known (see [`run_sqp`]), so stopped.
+    Known,
+}
+
 /// Sequential quadratic programming from the rotation `r0` to a rotation that (locally)
 /// minimises `rᵀΩr`, finished by Newton steps on the rotations; `None` if the result is
 /// not a finite matrix.
-fn run_sqp(omega: &Mat9, r0: Vec9) -> Option<Vec9> {
+///
+/// A run that comes within [`KNOWN_MINIMUM_SQUARED`] of a minimum in `known` (found by
+/// an earlier run, polished) would end there: it stops, without the steps and the
+/// polishing that would find that minimum again.
+fn run_sqp(omega: &Mat9, r0: Vec9, known: &[Candidate]) -> Option<Reached> {
     let mut r = r0;
     for _ in 0..MAX_SQP_STEPS {
         let Some(delta) = sqp_step(omega, &r) else {
@@ -624,12 +649,18 @@ fn run_sqp(omega: &Mat9, r0: Vec9) -> Option<Vec9> {
         if dot(&delta, &delta) <= STEP_SQUARED_TOLERANCE {
             break;
         }
+        if known
+            .iter()
+            .any(|c| distance_squared(&c.r, &r) < KNOWN_MINIMUM_SQUARED)
+        {
+            return Some(Reached::Known);
+        }
     }
     if determinant(&r) < 0.0 {
         r = scaled(&r, -1.0);
     }
     let rotation = orthonormalise(&rows(&r))?;
-    Some(newton_polish(omega, rotation))
+    Some(Reached::New(newton_polish(omega, rotation)))
 }
 
 /// One SQP step at `r`: `δ` minimising `(r + δ)ᵀΩ(r + δ)` subject to `h(r) + J(r)·δ = 0`
@@ -692,7 +723,7 @@ fn sqp_step(omega: &Mat9, r: &Vec9) -> Option<Vec9> {
 
     // The rows of cof(R) are b×c, c×a, a×b.
     let d = tangent_basis([b.cross(c), c.cross(a), a.cross(b)]);
-    let omega_d = [0, 1, 2].map(|k| multiply(omega, &d[k]));
+    let omega_d = omega_tangent(omega, &d);
     let mut ahead = *r;
     for (x, dx) in ahead.iter_mut().zip(&delta) {
         *x += dx;
@@ -720,11 +751,12 @@ fn sqp_step(omega: &Mat9, r: &Vec9) -> Option<Vec9> {
 /// [`MAX_NEWTON_STEPS`], or after a step short enough that what remains is below rounding.
 fn newton_polish(omega: &Mat9, rotation: [[f64; 3]; 3]) -> Vec9 {
     let mut r = flatten(&rotation);
-    let mut cost = quadratic(omega, &r);
+    // g = Ω·r, and the cost rᵀ·g.
+    let mut g = multiply(omega, &r);
+    let mut cost = dot(&g, &r);
     for _ in 0..MAX_NEWTON_STEPS {
-        let g = multiply(omega, &r);
         let d = tangent_basis(row_vectors(&r));
-        let omega_d = [0, 1, 2].map(|k| multiply(omega, &d[k]));
+        let omega_d = omega_tangent(omega, &d);
         let dtod = gram(&d, &omega_d);
         let rr = rows(&r);
         let gg = rows(&g);
@@ -753,11 +785,12 @@ fn newton_polish(omega: &Mat9, rotation: [[f64; 3]; 3]) -> Vec9 {
             // cannot be checked: the step is taken on the Hessian's word, and is the last.
             return next;
         }
-        let next_cost = quadratic(omega, &next);
+        let next_g = multiply(omega, &next);
+        let next_cost = dot(&next_g, &next);
         if next_cost.is_nan() || next_cost > cost {
             break;
         }
-        (r, cost) = (next, next_cost);
+        (r, g, cost) = (next, next_g, next_cost);
     }
     r
 }
@@ -771,6 +804,21 @@ fn tangent_basis(c: [DVec3; 3]) -> [Vec9; 3] {
         stack(c[2], z, -c[0]),
         stack(-c[1], c[0], z),
     ]
+}
+
+/// `Ω·dₖ` for the three columns `d` of [`tangent_basis`], as [`multiply`] would give
+/// them. Column `k` is zero in its block `k`, so the products take two thirds of the work
+/// of three full ones.
+fn omega_tangent(omega: &Mat9, d: &[Vec9; 3]) -> [Vec9; 3] {
+    let mut out = [[0.0; 9]; 3];
+    for (k, (o, dk)) in out.iter_mut().zip(d).enumerate() {
+        for (j, (row, &s)) in omega.iter().zip(dk).enumerate() {
+            if j / 3 != k {
+                axpy(o, s, row);
+            }
+        }
+    }
+    out
 }
 
 /// The least-squares (minimum-norm) solution of the symmetric positive semi-definite 3×3
@@ -814,9 +862,23 @@ fn distance_squared(a: &Vec9, b: &Vec9) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
 
-/// `Ω·v`.
+/// `Ω·v` for a symmetric `Ω` (every `Ω` here is made exactly symmetric), as the sum of
+/// its rows weighted by `v`'s entries: that runs in vector registers, where a dot product
+/// per row, one chain of additions, would not.
 fn multiply(omega: &Mat9, v: &Vec9) -> Vec9 {
-    std::array::from_fn(|i| dot(&omega[i], v))
+    let mut out = [0.0; 9];
+    for (row, &s) in omega.iter().zip(v) {
+        axpy(&mut out, s, row);
+    }
+    out
+}
+
+/// `out += s·x`.
+#[inline(always)]
+fn axpy(out: &mut Vec9, s: f64, x: &Vec9) {
+    for (o, x) in out.iter_mut().zip(x) {
+        *o += s * x;
+    }
 }
 
 /// `vᵀ·Ω·v`.
@@ -1093,7 +1155,10 @@ mod tests {
             let r = [e, scaled(&e, -1.0)]
                 .map(|start| {
                     let r0 = flatten(&nearest_rotation(&rows(&start)).unwrap());
-                    run_sqp(&problem.omega, r0).unwrap()
+                    match run_sqp(&problem.omega, r0, &[]).unwrap() {
+                        Reached::New(r) => r,
+                        Reached::Known => unreachable!("no minimum is known"),
+                    }
                 })
                 .into_iter()
                 .min_by(|a, b| problem.cost(a).total_cmp(&problem.cost(b)))
@@ -1111,6 +1176,65 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn runs_stopped_on_the_way_to_a_known_minimum_lose_no_minimum() {
+        // Every eigenvector of Ω, both signs, as a start: once run to the end each (the
+        // oracle) and once through a search that stops runs heading for a minimum it
+        // already has. The search must find only minima the oracle finds, every one of
+        // them that is a stationary point (a run can also end at its step limit), and
+        // actually stop some runs early.
+        let mut rng = Rng(33);
+        let mut stopped = 0;
+        for trial in 0..40 {
+            let n = [4, 5, 6, 12][trial % 4];
+            let (_, world, observed) = scene(&mut rng, n, 2.0);
+            let frame = Normalisation::new(&world, None).unwrap();
+            let problem = Problem::new(&world, &observed, None, frame).unwrap();
+            let (values, vectors) = symmetric_eigen(&problem.omega).unwrap();
+            let starts: Vec<Vec9> = vectors
+                .iter()
+                .flat_map(|v| [1.0, -1.0].map(|s| v.map(|x| x * s * 3f64.sqrt())))
+                .filter_map(|e| nearest_rotation(&rows(&e)).map(|r| flatten(&r)))
+                .collect();
+            let oracle: Vec<Vec9> = starts
+                .iter()
+                .filter_map(|&r0| match run_sqp(&problem.omega, r0, &[])? {
+                    Reached::New(r) => Some(r),
+                    Reached::Known => None,
+                })
+                .collect();
+            let mut search = Search {
+                problem: &problem,
+                minima: Vec::new(),
+            };
+            for &r0 in &starts {
+                if matches!(
+                    run_sqp(&problem.omega, r0, &search.minima),
+                    Some(Reached::Known)
+                ) {
+                    stopped += 1;
+                }
+                search.from(&r0);
+            }
+            let close = |a: &Vec9, b: &Vec9| distance_squared(a, b) < 1e-12;
+            for m in &search.minima {
+                assert!(oracle.iter().any(|o| close(o, &m.r)), "trial {trial}");
+            }
+            let stationary = |r: &Vec9| {
+                let g = multiply(&problem.omega, r);
+                let gradient = tangent_basis(row_vectors(r)).map(|d| dot(&d, &g));
+                gradient.iter().all(|x| x.abs() < 1e-10 * values[8])
+            };
+            for o in oracle.iter().filter(|o| stationary(o)) {
+                assert!(
+                    search.minima.iter().any(|m| close(&m.r, o)),
+                    "trial {trial}: a minimum was lost"
+                );
+            }
+        }
+        assert!(stopped > 40, "only {stopped} runs stopped early");
     }
 
     #[test]
