@@ -4,6 +4,11 @@
 //! the order of the world hierarchy's leaves, so that the bodies a query meets are read
 //! from a few neighbouring cache lines instead of from each body's own allocations.
 //!
+//! A cuboid (six faces in three parallel pairs at right angles: a box, turned or not)
+//! gets a shorter record, its centre, axes and half extents, and its distance is the
+//! box distance in its own frame: one cache line pair instead of planes, loci and
+//! edges.
+//!
 //! A record is rewritten in place when its body moves; a body that changes shape gets a
 //! new record at the end and its old one becomes garbage, reclaimed when the index lays
 //! the records out again (see [`Hulls::garbage`]).
@@ -17,19 +22,84 @@ use crate::model::Pose;
 /// Where one body's record lies in [`Hulls`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HullRef {
-    /// First number of the record: the surface tolerance, then 4 per plane (normal,
-    /// offset), then 3 per vertex.
+    /// First number of the record: the surface tolerance, then either (a cuboid) the
+    /// centre, the three axes and the three half extents, or 4 numbers per plane (normal,
+    /// offset) and 3 per vertex.
     at: u32,
-    /// First edge in [`Hulls::edges`].
+    /// First edge in [`Hulls::edges`] (none for a cuboid).
     edges_at: u32,
     faces: u16,
     points: u16,
     edges: u16,
+    /// Whether the record is a cuboid's.
+    cuboid: bool,
 }
 
 impl HullRef {
     fn len(&self) -> usize {
-        1 + 4 * self.faces as usize + 3 * self.points as usize
+        if self.cuboid {
+            CUBOID_LEN
+        } else {
+            1 + 4 * self.faces as usize + 3 * self.points as usize
+        }
+    }
+}
+
+/// Numbers in a cuboid's record: the tolerance, the centre, three axes, three half
+/// extents.
+const CUBOID_LEN: usize = 1 + 3 + 9 + 3;
+
+/// Two unit normals whose dot product is within this of −1 are opposite, and two whose
+/// dot product is within this of 0 are at right angles, for [`Cuboid::of`].
+const SQUARE: f64 = 1e-12;
+
+/// A cuboid in its body's frame: `|(x − centre)·axes[k]| ≤ half[k]` for k = 0, 1, 2.
+struct Cuboid {
+    centre: DVec3,
+    axes: [DVec3; 3],
+    half: [f64; 3],
+}
+
+impl Cuboid {
+    /// The cuboid `shape` is, if it is one: a convex shape of six faces and eight
+    /// vertices whose faces pair off into three opposite pairs with normals at right
+    /// angles (within [`SQUARE`]). The slab between a pair, `−o₂ ≤ n·x ≤ o₁` for the
+    /// planes `n·x = o₁` and `−n·x = o₂`, has centre `(o₁ − o₂)/2` and half width
+    /// `(o₁ + o₂)/2` along `n`.
+    fn of(shape: &BodyShape) -> Option<Cuboid> {
+        let f = &shape.faces;
+        if !shape.convex || f.len() != 6 || shape.points.len() != 8 {
+            return None;
+        }
+        let opposite =
+            |i: usize| (0..6).find(|&j| j != i && f[i].normal.dot(f[j].normal) < -1.0 + SQUARE);
+        let mut pairs = [(0, 0); 3];
+        let mut found = 0;
+        for i in 0..6 {
+            let j = opposite(i)?;
+            if opposite(j) != Some(i) {
+                return None;
+            }
+            if i < j {
+                *pairs.get_mut(found)? = (i, j);
+                found += 1;
+            }
+        }
+        if found != 3 {
+            return None;
+        }
+        let axes = pairs.map(|(i, _)| f[i].normal);
+        if (0..3).any(|a| axes[a].dot(axes[(a + 1) % 3]).abs() > SQUARE) {
+            return None;
+        }
+        let centre = (0..3)
+            .map(|k| {
+                let (i, j) = pairs[k];
+                axes[k] * (0.5 * (f[i].offset - f[j].offset))
+            })
+            .sum();
+        let half = pairs.map(|(i, j)| 0.5 * (f[i].offset + f[j].offset));
+        Some(Cuboid { centre, axes, half })
     }
 }
 
@@ -58,6 +128,19 @@ impl Hulls {
             return None;
         }
         let (at, edges_at) = (self.data.len(), self.edges.len());
+        if Cuboid::of(shape).is_some() {
+            let h = HullRef {
+                at: at as u32,
+                edges_at: edges_at as u32,
+                faces: 0,
+                points: 0,
+                edges: 0,
+                cuboid: true,
+            };
+            self.data.resize(at + CUBOID_LEN, 0.0);
+            self.pose(h, shape, pose);
+            return Some(h);
+        }
         for k in 0..shape.faces.len() {
             let cs = shape.corners_of(k);
             let canonical = cs
@@ -75,16 +158,28 @@ impl Hulls {
             faces: shape.faces.len() as u16,
             points: shape.points.len() as u16,
             edges: (self.edges.len() - edges_at) as u16,
+            cuboid: false,
         };
         self.data.resize(at + h.len(), 0.0);
         self.pose(h, shape, pose);
         Some(h)
     }
 
-    /// Rewrites record `h` (of `shape`) for the body posed at `pose`.
+    /// Rewrites record `h` (of `shape`) for the body posed at `pose`. Precondition: `h`
+    /// was made by [`Hulls::add`] for `shape`.
     pub fn pose(&mut self, h: HullRef, shape: &BodyShape, pose: &Pose) {
         let rec = &mut self.data[h.at as usize..h.at as usize + h.len()];
         rec[0] = shape.surface_eps();
+        if h.cuboid {
+            if let Some(b) = Cuboid::of(shape) {
+                rec[1..4].copy_from_slice(&pose.transform_point(b.centre).to_array());
+                for (out, a) in rec[4..13].chunks_exact_mut(3).zip(b.axes) {
+                    out.copy_from_slice(&pose.transform_vector(a).to_array());
+                }
+                rec[13..16].copy_from_slice(&b.half);
+            }
+            return;
+        }
         let (planes, points) = rec[1..].split_at_mut(4 * h.faces as usize);
         for (out, f) in planes.chunks_exact_mut(4).zip(&shape.faces) {
             let n = pose.transform_vector(f.normal);
@@ -94,6 +189,13 @@ impl Hulls {
         for (out, &p) in points.chunks_exact_mut(3).zip(&shape.points) {
             out.copy_from_slice(&pose.transform_point(p).to_array());
         }
+    }
+
+    /// The first number of record `h`: reading it brings the record's start into the
+    /// cache.
+    #[inline]
+    pub fn first(&self, h: HullRef) -> f64 {
+        self.data[h.at as usize]
     }
 
     /// Gives back spare capacity (after a body-by-body build).
@@ -134,68 +236,91 @@ impl Hulls {
     /// distance to the solid is at least the largest plane distance; the foot of the
     /// centre on a face plane it is in front of, when behind every other plane, is the
     /// closest point; otherwise the closest point lies on an edge (or at a vertex), and
-    /// the least distance to an edge segment is the distance.
+    /// the least distance to an edge segment is the distance. For a cuboid, with `q` the
+    /// centre in the cuboid's frame, the plane distances are `|qₖ| − halfₖ` and the
+    /// distance is the length of their positive parts.
     pub fn ball(&self, h: HullRef, c: DVec3, r: f64) -> Option<Option<(f64, bool)>> {
         let rec = &self.data[h.at as usize..h.at as usize + h.len()];
         let eps = rec[0];
+        if h.cuboid {
+            let v = |i: usize| DVec3::new(rec[i], rec[i + 1], rec[i + 2]);
+            let d = c - v(1);
+            let out = [0, 1, 2].map(|k| d.dot(v(4 + 3 * k)).abs() - rec[13 + k]);
+            // The largest plane distance: each pair of opposite planes gives
+            // |(c − centre)·axis| − half.
+            let side = out[0].max(out[1]).max(out[2]);
+            return settle(side, eps, r, || {
+                out.iter()
+                    .map(|x| x.max(0.0) * x.max(0.0))
+                    .sum::<f64>()
+                    .sqrt()
+            });
+        }
         let (planes, points) = rec[1..].split_at(4 * h.faces as usize);
         let side_of = |p: DVec3, q: &[f64]| q[0] * p.x + q[1] * p.y + q[2] * p.z - q[3];
         let side = planes
             .chunks_exact(4)
             .map(|q| side_of(c, q))
             .fold(f64::NEG_INFINITY, f64::max);
-        if side <= 0.0 {
-            return Some(Some((0.0, true)));
-        }
-        if side <= eps {
-            return None;
-        }
-        // Slack for the rounding of distances computed two ways.
-        let slack = eps + r * 1e-9;
-        if side > r + slack {
-            return Some(None);
-        }
-        // A foot counts as on its face when no other plane has it in front by more
-        // than a thousandth of the surface tolerance.
-        let on_face = eps * 1e-3;
-        let mut foot_distance = None;
-        for (k, q) in planes.chunks_exact(4).enumerate() {
-            let pd = side_of(c, q);
-            if pd <= 0.0 {
-                continue;
+        settle(side, eps, r, || {
+            // A foot counts as on its face when no other plane has it in front by more
+            // than a thousandth of the surface tolerance.
+            let on_face = eps * 1e-3;
+            for (k, q) in planes.chunks_exact(4).enumerate() {
+                let pd = side_of(c, q);
+                if pd <= 0.0 {
+                    continue;
+                }
+                let foot = c - DVec3::new(q[0], q[1], q[2]) * pd;
+                let behind_all = planes
+                    .chunks_exact(4)
+                    .enumerate()
+                    .all(|(j, o)| j == k || side_of(foot, o) <= on_face);
+                if behind_all {
+                    return pd;
+                }
             }
-            let foot = c - DVec3::new(q[0], q[1], q[2]) * pd;
-            let behind_all = planes
-                .chunks_exact(4)
-                .enumerate()
-                .all(|(j, o)| j == k || side_of(foot, o) <= on_face);
-            if behind_all {
-                foot_distance = Some(pd);
-                break;
-            }
-        }
-        let d = match foot_distance {
-            Some(d) => d,
-            None => {
-                let point = |i: u16| {
-                    let i = 3 * i as usize;
-                    DVec3::new(points[i], points[i + 1], points[i + 2])
-                };
-                let edges = &self.edges[h.edges_at as usize..][..h.edges as usize];
-                edges
-                    .iter()
-                    .map(|&[a, b]| segment_closest(c, point(a), point(b)).0)
-                    .fold(f64::INFINITY, f64::min)
-                    .sqrt()
-            }
-        };
-        if d < r - slack {
-            Some(Some((d, false)))
-        } else if d > r + slack {
-            Some(None)
-        } else {
-            None
-        }
+            let point = |i: u16| {
+                let i = 3 * i as usize;
+                DVec3::new(points[i], points[i + 1], points[i + 2])
+            };
+            let edges = &self.edges[h.edges_at as usize..][..h.edges as usize];
+            edges
+                .iter()
+                .map(|&[a, b]| segment_closest(c, point(a), point(b)).0)
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        })
+    }
+}
+
+/// The answer of [`Hulls::ball`] for a convex solid whose largest plane distance from
+/// the centre is `side` (inside exactly when it is not positive), of surface tolerance
+/// `eps`, and whose distance from an outside centre `distance` computes.
+fn settle(
+    side: f64,
+    eps: f64,
+    r: f64,
+    distance: impl FnOnce() -> f64,
+) -> Option<Option<(f64, bool)>> {
+    if side <= 0.0 {
+        return Some(Some((0.0, true)));
+    }
+    if side <= eps {
+        return None;
+    }
+    // Slack for the rounding of distances computed two ways.
+    let slack = eps + r * 1e-9;
+    if side > r + slack {
+        return Some(None);
+    }
+    let d = distance();
+    if d < r - slack {
+        Some(Some((d, false)))
+    } else if d > r + slack {
+        Some(None)
+    } else {
+        None
     }
 }
 
@@ -240,8 +365,9 @@ mod tests {
         assert!(!flat.convex && hulls.add(&flat, &pose).is_none());
     }
 
-    /// The record's answers against the general walk, around a turned, moved box and a
-    /// tetrahedron: inside, in front of faces, beside edges and beyond vertices.
+    /// The record's answers against the general walk, around a turned, moved box (a
+    /// cuboid's record), a tetrahedron and a hexagonal prism: inside, in front of faces,
+    /// beside edges and beyond vertices.
     #[test]
     fn records_answer_as_the_general_walk_does() {
         let mut s = Serials::new();
@@ -253,12 +379,20 @@ mod tests {
         let inverse = pose.inverse();
         let mut hulls = Hulls::default();
         let mut decided = 0;
-        for body in [
-            box_solid(&mut s, DVec3::new(2.0, 3.0, 4.0)).expect("a box"),
-            mktetra(&mut s, 1.5).expect("a tetrahedron"),
+        let hexagon: Vec<DVec2> = (0..6)
+            .map(|k| DVec2::from_angle(k as f64 * std::f64::consts::FRAC_PI_3) * 1.5)
+            .collect();
+        for (body, cuboid) in [
+            (
+                box_solid(&mut s, DVec3::new(2.0, 3.0, 4.0)).expect("a box"),
+                true,
+            ),
+            (mktetra(&mut s, 1.5).expect("a tetrahedron"), false),
+            (prism_solid(&mut s, &hexagon, 2.0).expect("a prism"), false),
         ] {
             let shape = shape(body);
             let h = hulls.add(&shape, &pose).expect("a record");
+            assert_eq!(h.cuboid, cuboid);
             let mut seed = 17u64;
             let mut next = || {
                 seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
@@ -294,7 +428,7 @@ mod tests {
                 }
             }
         }
-        assert!(decided > 3900, "only {decided} answers decided");
+        assert!(decided > 5900, "only {decided} answers decided");
     }
 
     #[test]

@@ -34,17 +34,50 @@ const HULL_GARBAGE_MIN: usize = 1 << 16;
 const LEAF_BOXES: usize = super::bvh::LEAF_LIMIT;
 
 /// One body in the index.
+///
+/// Laid out for the queries: the fields every candidate of a query reads (its bounds and
+/// record) fill the first cache line, those a hit reads (id, name) begin the second.
+#[repr(C, align(64))]
 struct Entry {
+    /// World bounds of the shape (empty for a removed body).
+    bounds: Aabb,
+    /// The body's record among the index's [`Hulls`], when it is small and convex.
+    hull: Option<HullRef>,
     id: BodyId,
     /// The body's name, kept here so that answers need not look it up in the world.
     name: Option<Box<str>>,
     shape: Arc<BodyShape>,
     pose: Pose,
     inverse: Pose,
-    /// World bounds of the shape (empty for a removed body).
-    bounds: Aabb,
-    /// The body's record among the index's [`Hulls`], when it is small and convex.
+}
+
+// The layout the queries rely on: bounds and record in the first line, the id at the
+// start of the second.
+const _: () = assert!(
+    std::mem::offset_of!(Entry, hull) + std::mem::size_of::<Option<HullRef>>() <= 64
+        && std::mem::offset_of!(Entry, id) == 64
+);
+
+/// What a sphere query at `bodies` detail reads of an entry whose record settles it:
+/// kept densely beside the entries (same index), so that such a query reads the record
+/// and not the entry.
+#[derive(Clone, Copy, Debug)]
+struct Quick {
+    /// The entry's record, when it has one (and is not removed).
     hull: Option<HullRef>,
+    id: BodyId,
+    /// Whether the body has a name (read from the entry for a hit).
+    named: bool,
+}
+
+impl Quick {
+    fn of(e: &Entry) -> Quick {
+        Quick {
+            hull: e.hull.filter(|_| !e.bounds.is_empty()),
+            id: e.id,
+            named: e.name.is_some(),
+        }
+    }
 }
 
 /// How much work a [`Spatial::sync`] did.
@@ -66,7 +99,11 @@ pub struct SyncStats {
 pub struct Spatial {
     world: Arc<World>,
     entries: Vec<Entry>,
+    /// [`Quick::of`] each entry, same index.
+    quick: Vec<Quick>,
     by_id: HashMap<BodyId, u32>,
+    /// The hierarchy over the entries' bounds. Its order is the identity: leaf position
+    /// `k` holds entry `k` (`rebuild` lays the entries out so).
     bvh: Bvh,
     /// Parent of each hierarchy node.
     parents: Vec<u32>,
@@ -100,6 +137,7 @@ impl Spatial {
         let mut s = Spatial {
             world: world.clone(),
             entries: Vec::with_capacity(bodies.len()),
+            quick: Vec::new(),
             by_id: HashMap::with_capacity(bodies.len()),
             bvh: Bvh::default(),
             parents: Vec::new(),
@@ -151,6 +189,7 @@ impl Spatial {
             .sum();
         shapes
             + self.entries.capacity() * std::mem::size_of::<Entry>()
+            + self.quick.capacity() * std::mem::size_of::<Quick>()
             + self.by_id.capacity() * 16
             + self.bvh.heap_bytes()
             + self.hulls.heap_bytes()
@@ -220,6 +259,7 @@ impl Spatial {
                 if let Some(h) = e.hull.take() {
                     self.hulls.release(h);
                 }
+                self.quick[i as usize] = Quick::of(e);
                 self.refit(i);
                 self.dead += 1;
                 stats.removed += 1;
@@ -231,6 +271,7 @@ impl Spatial {
                 let i = self.entries.len() as u32;
                 let mut e = entry(id, n.name.as_deref(), shape, pose);
                 e.hull = self.hulls.add(&e.shape, &e.pose);
+                self.quick.push(Quick::of(&e));
                 self.entries.push(e);
                 self.position.push(u32::MAX);
                 self.by_id.insert(id, i);
@@ -271,6 +312,7 @@ impl Spatial {
                     }
                     self.refit(i);
                 }
+                self.quick[i as usize] = Quick::of(&self.entries[i as usize]);
                 moved
             }
         }
@@ -317,6 +359,7 @@ impl Spatial {
             e.hull = self.hulls.add(&e.shape, &e.pose);
         }
         self.hulls.shrink_to_fit();
+        self.quick = self.entries.iter().map(Quick::of).collect();
         self.by_id = self
             .entries
             .iter()
@@ -330,24 +373,6 @@ impl Spatial {
         self.dead = 0;
         self.growth = 0.0;
         self.built_area = self.bvh.total_half_area();
-    }
-
-    /// Calls `visit` with each entry whose world bounds lie within `r2` (squared) of
-    /// `p`.
-    fn entries_within(&self, p: DVec3, r2: f64, mut visit: impl FnMut(&Entry)) {
-        let order = self.bvh.order();
-        self.bvh.within(p, r2, |k| {
-            let e = &self.entries[order[k] as usize];
-            if e.bounds.distance_squared(p) <= r2 {
-                visit(e);
-            }
-        });
-        for &i in &self.loose {
-            let e = &self.entries[i as usize];
-            if e.bounds.distance_squared(p) <= r2 {
-                visit(e);
-            }
-        }
     }
 
     /// A body's entry in an answer, its features still to come.
@@ -367,18 +392,40 @@ impl Spatial {
     pub fn sphere(&self, q: &SphereQuery) -> Result<SphereAnswer, QueryError> {
         q.validate()?;
         let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies);
-        self.entries_within(q.center, cull_radius2(q.radius), |e| {
+        let r2 = cull_radius2(q.radius);
+        let mut test = |i: usize| {
             if hits.full {
                 return;
             }
-            if let Some(decided) = e
+            // A record settles most small convex bodies at `bodies` detail. It meets the
+            // ball only when the body is nearer than the radius, so the bounds (looser)
+            // need no test first.
+            let quick = &self.quick[i];
+            if let Some(decided) = quick
                 .hull
                 .filter(|_| q.detail == Detail::Bodies)
                 .and_then(|h| self.hulls.ball(h, q.center, q.radius))
             {
                 if let Some((distance, inside)) = decided {
-                    hits.push(self.hit(e, Some(distance), inside), Features::default());
+                    let name = quick
+                        .named
+                        .then(|| self.entries[i].name.as_deref().map(str::to_owned))
+                        .flatten();
+                    let hit = BodyHit {
+                        id: quick.id.get(),
+                        name,
+                        distance: Some(distance),
+                        inside,
+                        faces: None,
+                        edges: None,
+                        vertices: None,
+                    };
+                    hits.push(hit, Features::default());
                 }
+                return;
+            }
+            let e = &self.entries[i];
+            if e.bounds.distance_squared(q.center) > r2 {
                 return;
             }
             let mut f = Features::default();
@@ -394,15 +441,29 @@ impl Spatial {
             ) {
                 hits.push(self.hit(e, Some(distance), inside), f);
             }
-        });
+        };
+        // The candidates are gathered first and their records touched in one tight loop
+        // of independent reads, so that the cache misses of a query overlap instead of
+        // following one another through the tests. Leaf position k holds entry k (see
+        // `rebuild`).
+        let mut candidates: Vec<u32> = Vec::with_capacity(64);
+        self.bvh.within(q.center, r2, |k| candidates.push(k as u32));
+        candidates.extend_from_slice(&self.loose);
+        if q.detail == Detail::Bodies {
+            let touched = candidates
+                .iter()
+                .filter_map(|&i| self.quick[i as usize].hull)
+                .map(|h| self.hulls.first(h))
+                .sum::<f64>();
+            std::hint::black_box(touched);
+        }
+        for &i in &candidates {
+            test(i as usize);
+        }
         let tolerance = hits.tolerance;
         let mut bodies = hits.finish()?;
-        bodies.sort_by(|a, b| {
-            a.distance
-                .unwrap_or(0.0)
-                .total_cmp(&b.distance.unwrap_or(0.0))
-                .then(a.id.cmp(&b.id))
-        });
+        // By distance, then id: the keys are sorted, and each hit moved once.
+        bodies.sort_by_cached_key(|b| (ordered_bits(b.distance.unwrap_or(0.0)), b.id));
         Ok(SphereAnswer {
             revision: self.revision(),
             center: q.center,
@@ -437,7 +498,7 @@ impl Spatial {
             visit(&self.entries[i as usize]);
         }
         let mut bodies = hits.finish()?;
-        bodies.sort_by_key(|b| b.id);
+        bodies.sort_by_cached_key(|b| b.id);
         Ok(BoxAnswer {
             revision: self.revision(),
             min: q.min,
@@ -614,6 +675,17 @@ impl Hits {
     }
 }
 
+/// A key that orders floats as [`f64::total_cmp`] does: the sign bit flipped for
+/// positive numbers, every bit for negative ones.
+fn ordered_bits(x: f64) -> u64 {
+    let bits = x.to_bits();
+    if bits >> 63 == 0 {
+        bits | 1 << 63
+    } else {
+        !bits
+    }
+}
+
 fn entry(id: BodyId, name: Option<&str>, shape: Arc<BodyShape>, pose: Pose) -> Entry {
     let bounds = shape.bounds.transformed(&pose);
     Entry {
@@ -651,6 +723,30 @@ mod tests {
     }
 
     #[test]
+    fn ordered_bits_order_floats_as_total_cmp_does() {
+        let xs = [
+            f64::NEG_INFINITY,
+            -3.5,
+            -1e-300,
+            -0.0,
+            0.0,
+            1e-300,
+            2.0,
+            7.25,
+            f64::INFINITY,
+        ];
+        for a in xs {
+            for b in xs {
+                assert_eq!(
+                    ordered_bits(a).cmp(&ordered_bits(b)),
+                    a.total_cmp(&b),
+                    "{a} {b}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn a_removed_body_is_neither_nearest_nor_hit_before_the_rebuild() {
         let (mut w, a, b) = two_boxes();
         let mut s = Spatial::build(Arc::new(w.clone()));
@@ -663,6 +759,13 @@ mod tests {
         let d = DVec3::new(1.0, 0.01, 0.02);
         let r = s.ray(DVec3::new(-5.0, 0.0, 0.0), d, f64::INFINITY);
         assert_eq!(r.expect("a query").hit.map(|h| h.id), Some(b.get()));
+        // A ball reaching into where it was and into the other box, at every detail.
+        for detail in [Detail::Bodies, Detail::Features] {
+            let q = SphereQuery::new(DVec3::new(2.5, 0.0, 0.0), 2.0).with_detail(detail);
+            let hits = s.sphere(&q).expect("a query").bodies;
+            let ids: Vec<u64> = hits.iter().map(|h| h.id).collect();
+            assert_eq!(ids, vec![b.get()], "{detail:?}");
+        }
     }
 
     #[test]
