@@ -63,7 +63,18 @@ pub fn ball(
     let features = detail != Detail::Bodies;
     let mut nearest: Option<Closest> = None;
     let cull2 = cull_radius2(r);
-    shape.bvh.within(c, cull2, |k| {
+    // The candidate faces are gathered first and touched in one tight loop of
+    // independent reads (`BodyShape::touch`), so that the cache misses of a query on a
+    // large shape overlap instead of following one another through the tests.
+    let mut candidates: Vec<u32> = Vec::with_capacity(64);
+    shape.bvh.within(c, cull2, |k| candidates.push(k as u32));
+    let touched = candidates
+        .iter()
+        .map(|&k| shape.touch(k as usize))
+        .sum::<f64>();
+    std::hint::black_box(touched);
+    candidates.iter().for_each(|&k| {
+        let k = k as usize;
         // A face farther than the ball (beyond rounding) has no side entering it.
         let closest = shape.closest_on_face(k, c);
         if closest.d2 > cull2 {

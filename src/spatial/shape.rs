@@ -277,6 +277,16 @@ impl BodyShape {
         &self.corners[f.start as usize..(f.start + f.len) as usize]
     }
 
+    /// Reads what the tests of face `k` read first: the face, its first corner and that
+    /// corner's locus. The answer means nothing; a caller reads many faces so, one after
+    /// another, for their cache misses to overlap before it tests them.
+    #[inline]
+    pub fn touch(&self, k: usize) -> f64 {
+        self.corners_of(k)
+            .first()
+            .map_or(0.0, |c| self.points[c.vertex as usize].x)
+    }
+
     /// Face `k`'s perimeter loci, in order.
     #[inline]
     pub fn loop_points(&self, k: usize) -> impl Iterator<Item = DVec3> + Clone + '_ {
