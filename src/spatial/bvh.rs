@@ -151,7 +151,8 @@ impl Bvh {
             first: 0,
             count: 0,
         });
-        split_parallel(&mut nodes, 0, &mut items, 0);
+        let span = Span::of(&items);
+        split_parallel(&mut nodes, 0, &mut items, 0, span);
         Bvh {
             nodes,
             order: items.into_iter().map(|it| it.index).collect(),
@@ -383,26 +384,67 @@ impl Ord for Near {
 
 /// Fills node `at` over `items` (which start at leaf position `offset`) and its
 /// subtree, splitting by binned SAH.
-fn split(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) {
-    if let Some(mid) = divide(nodes, at, items, offset) {
+fn split(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize, span: Span) {
+    if let Some((mid, l, r)) = divide(nodes, at, items, offset, span) {
         let first = nodes[at].first as usize;
         let (left, right) = items.split_at_mut(mid);
-        split(nodes, first, left, offset);
-        split(nodes, first + 1, right, offset + mid);
+        split(nodes, first, left, offset, l);
+        split(nodes, first + 1, right, offset + mid, r);
     }
 }
 
-/// Gives node `at` its box over `items` (which start at leaf position `offset`) and
-/// either makes it a leaf (answering `None`) or partitions `items` by binned SAH, pushes
-/// its two children (blank, adjacent, at `nodes[at].first`) and answers where the right
-/// child's items start.
-fn divide(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) -> Option<usize> {
-    let mut bounds = Aabb::EMPTY;
-    let mut cbounds = Aabb::EMPTY;
-    for it in items.iter() {
-        bounds = bounds.union(&it.bounds);
-        cbounds.grow(it.centroid);
+/// The box over some items and the box over their centroids.
+#[derive(Clone, Copy, Debug)]
+struct Span {
+    bounds: Aabb,
+    centroids: Aabb,
+}
+
+impl Span {
+    const EMPTY: Span = Span {
+        bounds: Aabb::EMPTY,
+        centroids: Aabb::EMPTY,
+    };
+
+    /// The span of `items`, by one pass over them.
+    fn of(items: &[Item]) -> Span {
+        let mut span = Span::EMPTY;
+        for it in items {
+            span.add(it);
+        }
+        span
     }
+
+    #[inline]
+    fn add(&mut self, it: &Item) {
+        self.bounds = self.bounds.union(&it.bounds);
+        self.centroids.grow(it.centroid);
+    }
+
+    fn union(&self, o: &Span) -> Span {
+        Span {
+            bounds: self.bounds.union(&o.bounds),
+            centroids: self.centroids.union(&o.centroids),
+        }
+    }
+}
+
+/// Gives node `at` its box over `items` (which start at leaf position `offset`; `span`
+/// is theirs) and either makes it a leaf (answering `None`) or partitions `items` by
+/// binned SAH, pushes its two children (blank, adjacent, at `nodes[at].first`) and
+/// answers where the right child's items start and the two children's spans (from the
+/// bins, without another pass over the items).
+fn divide(
+    nodes: &mut Vec<Node>,
+    at: usize,
+    items: &mut [Item],
+    offset: usize,
+    span: Span,
+) -> Option<(usize, Span, Span)> {
+    let Span {
+        bounds,
+        centroids: cbounds,
+    } = span;
     nodes[at].set_box(&bounds);
     let count = items.len() as u32;
     let leaf = |nodes: &mut Vec<Node>| {
@@ -426,8 +468,8 @@ fn divide(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) -
     } else {
         None
     };
-    let mid = match mid {
-        Some(m) => m,
+    let split = match mid {
+        Some(split) => split,
         None if items.len() <= LEAF_LIMIT && extent[axis] <= 0.0 => {
             // Coincident centroids in a small set: a leaf (a little over the limit).
             leaf(nodes);
@@ -437,7 +479,7 @@ fn divide(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) -
             // No split pays off by SAH, but the leaf is too big: split at the median.
             let m = items.len() / 2;
             items.select_nth_unstable_by(m, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-            m
+            (m, Span::of(&items[..m]), Span::of(&items[m..]))
         }
     };
     let first = nodes.len();
@@ -446,21 +488,21 @@ fn divide(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) -
     nodes.push(blank);
     nodes[at].first = first as u32;
     nodes[at].count = 0;
-    Some(mid)
+    Some(split)
 }
 
 /// [`split`], with the two subtrees of a large node built at once on rayon's threads
 /// (each into its own node list, spliced in afterwards). The hierarchy is the same as
 /// [`split`] builds, node for node, up to the order of the nodes in memory.
-fn split_parallel(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize) {
+fn split_parallel(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize, span: Span) {
     if items.len() <= PARALLEL_MIN {
-        split(nodes, at, items, offset);
+        split(nodes, at, items, offset, span);
         return;
     }
     // Split this node alone: its children are made, then filled below.
     let mut top = vec![nodes[at]];
-    let mid = match divide(&mut top, 0, items, offset) {
-        Some(mid) => mid,
+    let (mid, l_span, r_span) = match divide(&mut top, 0, items, offset, span) {
+        Some(split) => split,
         None => {
             nodes[at] = top[0];
             return;
@@ -468,12 +510,15 @@ fn split_parallel(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: 
     };
     let (left, right) = items.split_at_mut(mid);
     let blank = top[1];
-    let build = |items: &mut [Item], offset: usize| {
+    let build = |items: &mut [Item], offset: usize, span: Span| {
         let mut sub = vec![blank];
-        split_parallel(&mut sub, 0, items, offset);
+        split_parallel(&mut sub, 0, items, offset, span);
         sub
     };
-    let (l, r) = rayon::join(|| build(left, offset), || build(right, offset + mid));
+    let (l, r) = rayon::join(
+        || build(left, offset, l_span),
+        || build(right, offset + mid, r_span),
+    );
     // Children adjacent at `first`, then the rest of each subtree after them.
     let first = nodes.len();
     let l_base = first + 2;
@@ -500,27 +545,32 @@ fn relocated(mut sub: Vec<Node>, base: usize) -> Vec<Node> {
 
 /// The SAH split of `items` along `axis`: partitions them and answers the split point,
 /// or `None` when every centroid falls in one bin.
-fn sah_split(items: &mut [Item], axis: usize, cmin: f64, extent: f64) -> Option<usize> {
+fn sah_split(
+    items: &mut [Item],
+    axis: usize,
+    cmin: f64,
+    extent: f64,
+) -> Option<(usize, Span, Span)> {
     let scale = BINS as f64 / extent;
     let bin_of = |c: f64| (((c - cmin) * scale) as usize).min(BINS - 1);
-    let mut bins = [(Aabb::EMPTY, 0usize); BINS];
+    let mut bins = [(Span::EMPTY, 0usize); BINS];
     for it in items.iter() {
         let b = &mut bins[bin_of(it.centroid[axis])];
-        b.0 = b.0.union(&it.bounds);
+        b.0.add(it);
         b.1 += 1;
     }
     // Sweep from the right, then from the left, to cost each of the BINS − 1 planes.
     let mut right_area = [0.0f64; BINS];
     let mut acc = Aabb::EMPTY;
     for i in (1..BINS).rev() {
-        acc = acc.union(&bins[i].0);
+        acc = acc.union(&bins[i].0.bounds);
         right_area[i] = acc.half_area();
     }
     let mut best: Option<(f32, usize)> = None;
     let mut acc = Aabb::EMPTY;
     let mut left_count = 0;
     for i in 0..BINS - 1 {
-        acc = acc.union(&bins[i].0);
+        acc = acc.union(&bins[i].0.bounds);
         left_count += bins[i].1;
         let right_count = items.len() - left_count;
         if left_count == 0 || right_count == 0 {
@@ -541,7 +591,8 @@ fn sah_split(items: &mut [Item], axis: usize, cmin: f64, extent: f64) -> Option<
             l += 1;
         }
     }
-    (l > 0 && l < items.len()).then_some(l)
+    let side = |range: &[(Span, usize)]| range.iter().fold(Span::EMPTY, |s, b| s.union(&b.0));
+    (l > 0 && l < items.len()).then(|| (l, side(&bins[..=plane]), side(&bins[plane + 1..])))
 }
 
 #[cfg(test)]
@@ -583,7 +634,8 @@ mod tests {
             first: 0,
             count: 0,
         }];
-        split(&mut nodes, 0, &mut items, 0);
+        let span = Span::of(&items);
+        split(&mut nodes, 0, &mut items, 0, span);
         Bvh {
             nodes,
             order: items.into_iter().map(|it| it.index).collect(),

@@ -5,6 +5,7 @@
 //! bash bench/spatial/run.sh            # both data sets, then a table
 //! bash bench/spatial/run.sh terrain    # one data set (terrain or city)
 //! target/release/spatial-peers profile city 15 bodies   # winged alone, for perf
+//! target/release/spatial-peers profile-build terrain 5   # winged's builds alone
 //! ```
 //!
 //! Data (`bench/spatial/data.rs`): a closed terrain solid of 1,000,000 triangles and a
@@ -631,11 +632,30 @@ fn profile(args: &[String]) {
     println!("{n} queries, {us:.2} µs each");
 }
 
+/// `profile-build <terrain|city> [rounds]`: winged's index built again and again over
+/// one world, for `perf record`; each build's time.
+fn profile_build(args: &[String]) {
+    let set = args.first().map_or("terrain", String::as_str);
+    let rounds: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(5);
+    let world = Arc::new(if set == "terrain" {
+        Terrain::new().world().0
+    } else {
+        data::city_world(&data::city()).0
+    });
+    for _ in 0..rounds {
+        let start = Instant::now();
+        let spatial = Spatial::build(world.clone());
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        println!("{set}: {} bodies indexed in {ms:.0} ms", spatial.len());
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.first().map(String::as_str) == Some("profile") {
-        profile(&args[1..]);
-        return;
+    match args.first().map(String::as_str) {
+        Some("profile") => return profile(&args[1..]),
+        Some("profile-build") => return profile_build(&args[1..]),
+        _ => {}
     }
     let which = args.first().cloned().unwrap_or_default();
     println!(
