@@ -242,11 +242,30 @@ impl PartsTree {
     /// The world pose of `b`: the poses on the path from the root down to `b` composed,
     /// so it maps `b`'s vertex loci to world coordinates. The root's is the identity.
     pub fn world_pose(&self, b: BodyId) -> Option<Pose> {
-        let mut pose = self.nodes.get(&b)?.pose;
-        for a in self.ancestors(b) {
-            pose = self.nodes[&a].pose.compose(&pose);
+        let node = self.nodes.get(&b)?;
+        Some(self.world_pose_of(b, node))
+    }
+
+    /// [`world_pose`](Self::world_pose) of `b` whose node, already looked up, is `node`:
+    /// one lookup per supart on the way to the root and none for `b` itself.
+    /// Precondition: `node` is `b`'s node.
+    pub fn world_pose_of(&self, b: BodyId, node: &BodyNode) -> Pose {
+        let mut pose = node.pose;
+        if b == self.root {
+            return pose;
         }
-        Some(pose)
+        let mut at = node.supart;
+        for _ in 0..self.nodes.len() {
+            let Some(n) = self.nodes.get(&at) else {
+                break;
+            };
+            pose = n.pose.compose(&pose);
+            if at == self.root {
+                break;
+            }
+            at = n.supart;
+        }
+        pose
     }
 
     /// Checks the tree's invariants and returns every problem found (empty when sound).

@@ -260,6 +260,13 @@ impl World {
         self.tree.world_pose(b)
     }
 
+    /// [`world_pose`](Self::world_pose) of `b` whose node, already looked up with
+    /// [`node`](Self::node), is `node` (one lookup fewer). Precondition: `node` is
+    /// `b`'s node.
+    pub fn world_pose_of(&self, b: BodyId, node: &BodyNode) -> Pose {
+        self.tree.world_pose_of(b, node)
+    }
+
     /// The world locus of vertex `v` of body `b`.
     pub fn world_position(&self, b: BodyId, v: VertexId) -> Option<DVec3> {
         let node = self.tree.get(b)?;

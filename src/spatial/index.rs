@@ -209,9 +209,7 @@ impl Spatial {
             Some(ids) => {
                 let mut stack: Vec<BodyId> = ids.to_vec();
                 while let Some(id) = stack.pop() {
-                    if self.refresh(&world, id, &mut stats)
-                        && let Some(parts) = world.parts(id)
-                    {
+                    if let Some(parts) = self.refresh(&world, id, &mut stats) {
                         stack.extend_from_slice(parts);
                     }
                 }
@@ -244,14 +242,21 @@ impl Spatial {
         stats
     }
 
-    /// Brings body `id`'s entry in line with `world`. Answers whether the body's parts
-    /// may have moved with it: `false` only when it has an entry whose world pose is
-    /// unchanged.
-    fn refresh(&mut self, world: &World, id: BodyId, stats: &mut SyncStats) -> bool {
-        let node = world.node(id).filter(|n| n.body.vertex_count() > 0);
+    /// Brings body `id`'s entry in line with `world`. Answers the body's parts when they
+    /// may have moved with it: not when it has an entry whose world pose is unchanged,
+    /// nor when it is not in `world`. The body's node is looked up in the world once.
+    fn refresh<'w>(
+        &mut self,
+        world: &'w World,
+        id: BodyId,
+        stats: &mut SyncStats,
+    ) -> Option<&'w [BodyId]> {
+        let found = world.node(id);
+        let parts = found.map(|n| n.parts.as_slice());
+        let node = found.filter(|n| n.body.vertex_count() > 0);
         let at = self.by_id.get(&id).copied();
         match (node, at) {
-            (None, None) => true,
+            (None, None) => parts,
             (None, Some(i)) => {
                 self.by_id.remove(&id);
                 let e = &mut self.entries[i as usize];
@@ -263,10 +268,10 @@ impl Spatial {
                 self.refit(i);
                 self.dead += 1;
                 stats.removed += 1;
-                true
+                parts
             }
             (Some(n), None) => {
-                let pose = world.world_pose(id).unwrap_or_default();
+                let pose = world.world_pose_of(id, n);
                 let shape = Arc::new(BodyShape::build(n.body.clone()));
                 let i = self.entries.len() as u32;
                 let mut e = entry(id, n.name.as_deref(), shape, pose);
@@ -278,10 +283,10 @@ impl Spatial {
                 self.loose.push(i);
                 stats.added += 1;
                 stats.shaped += 1;
-                true
+                parts
             }
             (Some(n), Some(i)) => {
-                let pose = world.world_pose(id).unwrap_or_default();
+                let pose = world.world_pose_of(id, n);
                 let e = &mut self.entries[i as usize];
                 if e.name.as_deref() != n.name.as_deref() {
                     e.name = n.name.as_deref().map(Box::from);
@@ -294,7 +299,7 @@ impl Spatial {
                 let moved = e.pose != pose;
                 if reshaped || moved {
                     let hull = e.hull;
-                    *e = entry(id, n.name.as_deref(), e.shape.clone(), pose);
+                    e.place(pose);
                     e.hull = match hull {
                         Some(h) if !reshaped => {
                             self.hulls.pose(h, &e.shape, &e.pose);
@@ -313,7 +318,7 @@ impl Spatial {
                     self.refit(i);
                 }
                 self.quick[i as usize] = Quick::of(&self.entries[i as usize]);
-                moved
+                parts.filter(|_| moved)
             }
         }
     }
@@ -687,15 +692,26 @@ fn ordered_bits(x: f64) -> u64 {
 }
 
 fn entry(id: BodyId, name: Option<&str>, shape: Arc<BodyShape>, pose: Pose) -> Entry {
-    let bounds = shape.bounds.transformed(&pose);
-    Entry {
+    let mut e = Entry {
         id,
         name: name.map(Box::from),
-        inverse: pose.inverse(),
+        inverse: Pose::IDENTITY,
         shape,
-        pose,
-        bounds,
+        pose: Pose::IDENTITY,
+        bounds: Aabb::EMPTY,
         hull: None,
+    };
+    e.place(pose);
+    e
+}
+
+impl Entry {
+    /// Puts the entry's shape at world pose `pose`: the pose, its inverse and the world
+    /// bounds (the record, if any, is the caller's to rewrite).
+    fn place(&mut self, pose: Pose) {
+        self.bounds = self.shape.bounds.transformed(&pose);
+        self.inverse = pose.inverse();
+        self.pose = pose;
     }
 }
 
