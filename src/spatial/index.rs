@@ -458,7 +458,7 @@ impl Spatial {
             let touched = candidates
                 .iter()
                 .filter_map(|&i| self.quick[i as usize].hull)
-                .map(|h| self.hulls.first(h))
+                .map(|h| self.hulls.touch(h))
                 .sum::<f64>();
             std::hint::black_box(touched);
         }
