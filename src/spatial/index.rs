@@ -35,8 +35,9 @@ const LEAF_BOXES: usize = super::bvh::LEAF_LIMIT;
 
 /// One body in the index.
 ///
-/// Laid out for the queries: the fields every candidate of a query reads (its bounds and
-/// record) fill the first cache line, those a hit reads (id, name) begin the second.
+/// Laid out for the queries: the fields a query reads of every candidate it tests through
+/// its entry (bounds, record) fill the first cache line, those a hit reads (id, name)
+/// begin the second.
 #[repr(C, align(64))]
 struct Entry {
     /// World bounds of the shape (empty for a removed body).
@@ -380,19 +381,6 @@ impl Spatial {
         self.built_area = self.bvh.total_half_area();
     }
 
-    /// A body's entry in an answer, its features still to come.
-    fn hit(&self, e: &Entry, distance: Option<f64>, inside: bool) -> BodyHit {
-        BodyHit {
-            id: e.id.get(),
-            name: e.name.as_deref().map(str::to_owned),
-            distance,
-            inside,
-            faces: None,
-            edges: None,
-            vertices: None,
-        }
-    }
-
     /// The bodies reaching into a ball, with what of them is inside it.
     pub fn sphere(&self, q: &SphereQuery) -> Result<SphereAnswer, QueryError> {
         q.validate()?;
@@ -414,17 +402,9 @@ impl Spatial {
                 if let Some((distance, inside)) = decided {
                     let name = quick
                         .named
-                        .then(|| self.entries[i].name.as_deref().map(str::to_owned))
+                        .then(|| self.entries[i].name.as_deref())
                         .flatten();
-                    let hit = BodyHit {
-                        id: quick.id.get(),
-                        name,
-                        distance: Some(distance),
-                        inside,
-                        faces: None,
-                        edges: None,
-                        vertices: None,
-                    };
+                    let hit = body_hit(quick.id, name, Some(distance), inside);
                     hits.push(hit, Features::default());
                 }
                 return;
@@ -444,7 +424,7 @@ impl Spatial {
                 q.tolerance,
                 &mut f,
             ) {
-                hits.push(self.hit(e, Some(distance), inside), f);
+                hits.push(body_hit(e.id, e.name.as_deref(), Some(distance), inside), f);
             }
         };
         // The candidates are gathered first and their records touched in one tight loop
@@ -493,7 +473,7 @@ impl Spatial {
             if let Some(inside) =
                 reach::aabb(&e.shape, &e.pose, &e.inverse, lo, hi, q.detail, &mut f)
             {
-                hits.push(self.hit(e, None, inside), f);
+                hits.push(body_hit(e.id, e.name.as_deref(), None, inside), f);
             }
         };
         let order = self.bvh.order();
@@ -503,6 +483,7 @@ impl Spatial {
             visit(&self.entries[i as usize]);
         }
         let mut bodies = hits.finish()?;
+        // The ids are sorted, and each hit moved once.
         bodies.sort_by_cached_key(|b| b.id);
         Ok(BoxAnswer {
             revision: self.revision(),
@@ -677,6 +658,19 @@ impl Hits {
             });
         }
         Ok(self.bodies)
+    }
+}
+
+/// A body's entry in an answer, its features still to come.
+fn body_hit(id: BodyId, name: Option<&str>, distance: Option<f64>, inside: bool) -> BodyHit {
+    BodyHit {
+        id: id.get(),
+        name: name.map(str::to_owned),
+        distance,
+        inside,
+        faces: None,
+        edges: None,
+        vertices: None,
     }
 }
 
