@@ -4,8 +4,7 @@
 //! the order of the world hierarchy's leaves, so that the bodies a query meets are read
 //! from a few neighbouring cache lines instead of from each body's own allocations.
 //!
-//! A cuboid (six faces in three parallel pairs at right angles: a box, turned or not)
-//! gets a shorter record, its centre, axes and half extents, and its distance is the
+//! A [cuboid](BodyShape::cuboid) (a box, turned or not) gets a shorter record, its centre, axes and half extents, and its distance is the
 //! box distance in its own frame: one cache line pair instead of planes, loci and
 //! edges.
 //!
@@ -49,60 +48,6 @@ impl HullRef {
 /// extents.
 const CUBOID_LEN: usize = 1 + 3 + 9 + 3;
 
-/// Two unit normals whose dot product is within this of −1 are opposite, and two whose
-/// dot product is within this of 0 are at right angles, for [`Cuboid::of`].
-const SQUARE: f64 = 1e-12;
-
-/// A cuboid in its body's frame: `|(x − centre)·axes[k]| ≤ half[k]` for k = 0, 1, 2.
-struct Cuboid {
-    centre: DVec3,
-    axes: [DVec3; 3],
-    half: [f64; 3],
-}
-
-impl Cuboid {
-    /// The cuboid `shape` is, if it is one: a convex shape of six faces and eight
-    /// vertices whose faces pair off into three opposite pairs with normals at right
-    /// angles (within [`SQUARE`]). The slab between a pair, `−o₂ ≤ n·x ≤ o₁` for the
-    /// planes `n·x = o₁` and `−n·x = o₂`, has centre `(o₁ − o₂)/2` and half width
-    /// `(o₁ + o₂)/2` along `n`.
-    fn of(shape: &BodyShape) -> Option<Cuboid> {
-        let f = &shape.faces;
-        if !shape.convex || f.len() != 6 || shape.points.len() != 8 {
-            return None;
-        }
-        let opposite =
-            |i: usize| (0..6).find(|&j| j != i && f[i].normal.dot(f[j].normal) < -1.0 + SQUARE);
-        let mut pairs = [(0, 0); 3];
-        let mut found = 0;
-        for i in 0..6 {
-            let j = opposite(i)?;
-            if opposite(j) != Some(i) {
-                return None;
-            }
-            if i < j {
-                *pairs.get_mut(found)? = (i, j);
-                found += 1;
-            }
-        }
-        if found != 3 {
-            return None;
-        }
-        let axes = pairs.map(|(i, _)| f[i].normal);
-        if (0..3).any(|a| axes[a].dot(axes[(a + 1) % 3]).abs() > SQUARE) {
-            return None;
-        }
-        let centre = (0..3)
-            .map(|k| {
-                let (i, j) = pairs[k];
-                axes[k] * (0.5 * (f[i].offset - f[j].offset))
-            })
-            .sum();
-        let half = pairs.map(|(i, j)| 0.5 * (f[i].offset + f[j].offset));
-        Some(Cuboid { centre, axes, half })
-    }
-}
-
 /// The records of the convex bodies of an index.
 #[derive(Default)]
 pub struct Hulls {
@@ -128,7 +73,7 @@ impl Hulls {
             return None;
         }
         let (at, edges_at) = (self.data.len(), self.edges.len());
-        if Cuboid::of(shape).is_some() {
+        if shape.cuboid.is_some() {
             let h = HullRef {
                 at: at as u32,
                 edges_at: edges_at as u32,
@@ -171,7 +116,7 @@ impl Hulls {
         let rec = &mut self.data[h.at as usize..h.at as usize + h.len()];
         rec[0] = shape.surface_eps();
         if h.cuboid {
-            if let Some(b) = Cuboid::of(shape) {
+            if let Some(b) = &shape.cuboid {
                 rec[1..4].copy_from_slice(&pose.transform_point(b.centre).to_array());
                 for (out, a) in rec[4..13].chunks_exact_mut(3).zip(b.axes) {
                     out.copy_from_slice(&pose.transform_vector(a).to_array());

@@ -100,6 +100,65 @@ pub struct BodyShape {
     /// (so that the solid has volume). The solid is then the intersection of its faces'
     /// half-spaces, which [`BodyShape::plane_side`] tests.
     pub convex: bool,
+    /// The cuboid the solid is, when it is one (see [`Cuboid::of`]).
+    pub cuboid: Option<Cuboid>,
+}
+
+/// Two unit normals whose dot product is within this of −1 are opposite, and two whose
+/// dot product is within this of 0 are at right angles, for [`Cuboid::of`].
+const SQUARE: f64 = 1e-12;
+
+/// A cuboid in its body's frame: `|(x − centre)·axes[k]| ≤ half[k]` for k = 0, 1, 2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cuboid {
+    /// The centre.
+    pub centre: DVec3,
+    /// Three unit axes at right angles.
+    pub axes: [DVec3; 3],
+    /// The half extents along them.
+    pub half: [f64; 3],
+}
+
+impl Cuboid {
+    /// The cuboid a shape of faces `f` over `points` vertices is, if it is one: a convex
+    /// shape of six faces and eight vertices whose faces pair off into three opposite pairs with normals at right
+    /// angles (within [`SQUARE`]). The slab between a pair, `−o₂ ≤ n·x ≤ o₁` for the
+    /// planes `n·x = o₁` and `−n·x = o₂`, has centre `(o₁ − o₂)/2` and half width
+    /// `(o₁ + o₂)/2` along `n`.
+    fn of(f: &[FaceRec], points: usize, convex: bool) -> Option<Cuboid> {
+        if !convex || f.len() != 6 || points != 8 {
+            return None;
+        }
+        let opposite =
+            |i: usize| (0..6).find(|&j| j != i && f[i].normal.dot(f[j].normal) < -1.0 + SQUARE);
+        let mut pairs = [(0, 0); 3];
+        let mut found = 0;
+        for i in 0..6 {
+            let j = opposite(i)?;
+            if opposite(j) != Some(i) {
+                return None;
+            }
+            if i < j {
+                *pairs.get_mut(found)? = (i, j);
+                found += 1;
+            }
+        }
+        if found != 3 {
+            return None;
+        }
+        let axes = pairs.map(|(i, _)| f[i].normal);
+        if (0..3).any(|a| axes[a].dot(axes[(a + 1) % 3]).abs() > SQUARE) {
+            return None;
+        }
+        let centre = (0..3)
+            .map(|k| {
+                let (i, j) = pairs[k];
+                axes[k] * (0.5 * (f[i].offset - f[j].offset))
+            })
+            .sum();
+        let half = pairs.map(|(i, j)| 0.5 * (f[i].offset + f[j].offset));
+        Some(Cuboid { centre, axes, half })
+    }
 }
 
 impl BodyShape {
@@ -220,6 +279,7 @@ impl BodyShape {
             (bounds.max - bounds.min).length()
         };
         let convex = is_convex(b, &ordered, &points, surface_eps(size));
+        let cuboid = Cuboid::of(&ordered, points.len(), convex);
         BodyShape {
             body,
             points,
@@ -231,6 +291,7 @@ impl BodyShape {
             bounds,
             size,
             convex,
+            cuboid,
         }
     }
 
