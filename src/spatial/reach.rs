@@ -70,27 +70,35 @@ pub fn ball(
     shape.bvh.within(c, cull2, |k| candidates.push(k as u32));
     let touched = candidates
         .iter()
-        .map(|&k| shape.touch(k as usize))
-        .sum::<f64>();
+        .fold(0, |acc, &k| acc ^ shape.touch(k as usize));
     std::hint::black_box(touched);
     candidates.iter().for_each(|&k| {
         let k = k as usize;
-        // A face farther than the ball (beyond rounding) has no side entering it.
+        // A face whose bounds are farther than the ball (beyond rounding) has no point
+        // in it; the bounds are cheaper than the closest point.
+        if Aabb::of_points(shape.loop_points(k)).distance_squared(c) > cull2 {
+            return;
+        }
         let closest = shape.closest_on_face(k, c);
         if closest.d2 > cull2 {
             return;
         }
         let cs = shape.corners_of(k);
-        let mut meets = false;
+        let mut meets = closest.interior && closest.d2 <= r2;
         for (i, corner) in cs.iter().enumerate() {
             let a = shape.points[corner.vertex as usize];
+            let a_in = features && (a - c).length_squared() <= r2;
+            // Once the face is known to meet the ball, a side is clipped only for what
+            // its corner reports.
+            if meets && !(features && reports(corner, a_in)) {
+                continue;
+            }
             let b = shape.points[cs[(i + 1) % cs.len()].vertex as usize];
             let Some((t0, t1)) = clip_segment_ball(a, b, c, r) else {
                 continue;
             };
             meets = true;
             if features {
-                let a_in = (a - c).length_squared() <= r2;
                 report(
                     shape,
                     corner,
@@ -102,7 +110,6 @@ pub fn ball(
                 );
             }
         }
-        meets |= closest.interior && closest.d2 <= r2;
         if !meets {
             return;
         }
@@ -139,6 +146,14 @@ pub fn ball(
         // No face meets the ball: either it is wholly inside the solid or apart from it.
         None => shape.contains(c).then_some((0.0, true)),
     }
+}
+
+/// Whether [`report`] appends anything for `corner` (with `a_in` whether its starting
+/// vertex is inside the region) when its side enters the region.
+#[inline]
+fn reports(corner: &Corner, a_in: bool) -> bool {
+    (corner.flags & REPORT_EDGE != 0 && corner.edge != NO_EDGE)
+        || (corner.flags & REPORT_VERTEX != 0 && a_in)
 }
 
 /// Appends what a perimeter corner reports of a region its segment `ab` enters over

@@ -338,14 +338,18 @@ impl BodyShape {
         &self.corners[f.start as usize..(f.start + f.len) as usize]
     }
 
-    /// Reads what the tests of face `k` read first: the face, its first corner and that
-    /// corner's locus. The answer means nothing; a caller reads many faces so, one after
+    /// Reads what the tests of face `k` read first: the face, its first corner, that
+    /// corner's locus and the serial numbers of its vertex and edge (read when the face
+    /// is reported). The answer means nothing; a caller reads many faces so, one after
     /// another, for their cache misses to overlap before it tests them.
     #[inline]
-    pub fn touch(&self, k: usize) -> f64 {
-        self.corners_of(k)
-            .first()
-            .map_or(0.0, |c| self.points[c.vertex as usize].x)
+    pub fn touch(&self, k: usize) -> u64 {
+        self.corners_of(k).first().map_or(0, |c| {
+            let edge = self.edge_serials.get(c.edge as usize).copied().unwrap_or(0);
+            self.points[c.vertex as usize].x.to_bits()
+                ^ self.vertex_serials[c.vertex as usize]
+                ^ edge
+        })
     }
 
     /// Face `k`'s perimeter loci, in order.
