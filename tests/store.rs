@@ -824,6 +824,23 @@ fn a_snapshot_with_a_valid_checksum_but_an_unsound_world_is_refused() {
 }
 
 #[test]
+fn a_snapshot_whose_root_is_posed_is_refused() {
+    // The world never poses its root, and world poses are composed below it on that
+    // understanding: a snapshot with a posed root is unsound.
+    let (run, _) = plain_run(5, 16);
+    let root = run.world.root().get().to_string();
+    let mut v = serde_json::to_value(&run.world).unwrap();
+    v["tree"]["nodes"][root.as_str()]["pose"]["position"] = json!([1.0, 0.0, 0.0]);
+    let broken: World = serde_json::from_value(v).unwrap();
+    let problem = check_world(&broken).unwrap_err();
+    assert!(problem.contains("root's pose"), "{problem}");
+    assert!(matches!(
+        snapshot::decode(&snapshot::encode(&broken)),
+        Err(SnapshotError::Invalid(_))
+    ));
+}
+
+#[test]
 fn snapshot_header_checks() {
     let (run, _) = plain_run(5, 15);
     let good = snapshot::encode(&run.world);

@@ -247,22 +247,24 @@ impl PartsTree {
     }
 
     /// [`world_pose`](Self::world_pose) of `b` whose node, already looked up, is `node`:
-    /// one lookup per supart on the way to the root and none for `b` itself.
+    /// one lookup per supart below the root and none for `b` itself.
     /// Precondition: `node` is `b`'s node.
     pub fn world_pose_of(&self, b: BodyId, node: &BodyNode) -> Pose {
         let mut pose = node.pose;
         if b == self.root {
             return pose;
         }
+        // The root's pose is the identity (see `check`): the walk stops below it, so
+        // that a body hung from the root costs no look-up.
         let mut at = node.supart;
         for _ in 0..self.nodes.len() {
+            if at == self.root {
+                break;
+            }
             let Some(n) = self.nodes.get(&at) else {
                 break;
             };
             pose = n.pose.compose(&pose);
-            if at == self.root {
-                break;
-            }
             at = n.supart;
         }
         pose
@@ -278,6 +280,9 @@ impl PartsTree {
         };
         if root.supart != self.root {
             out.push("the root is not its own supart".to_owned());
+        }
+        if root.pose != Pose::IDENTITY {
+            out.push("the root's pose is not the identity".to_owned());
         }
         for (&id, n) in &self.nodes {
             if id != self.root {

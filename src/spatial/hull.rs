@@ -22,8 +22,8 @@ use crate::model::Pose;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HullRef {
     /// First number of the record: the surface tolerance, then either (a cuboid) the
-    /// centre, the three axes and the three half extents, or 4 numbers per plane (normal,
-    /// offset) and 3 per vertex.
+    /// centre, the three axes and the three half extents (then the centre and axes in the
+    /// body's frame), or 4 numbers per plane (normal, offset) and 3 per vertex.
     at: u32,
     /// First edge in [`Hulls::edges`] (none for a cuboid).
     edges_at: u32,
@@ -35,18 +35,31 @@ pub struct HullRef {
 }
 
 impl HullRef {
+    /// Numbers in the record.
     fn len(&self) -> usize {
         if self.cuboid {
             CUBOID_LEN
+        } else {
+            self.queried()
+        }
+    }
+
+    /// Numbers in the part of the record a query reads (its start).
+    fn queried(&self) -> usize {
+        if self.cuboid {
+            CUBOID_QUERIED
         } else {
             1 + 4 * self.faces as usize + 3 * self.points as usize
         }
     }
 }
 
-/// Numbers in a cuboid's record: the tolerance, the centre, three axes, three half
-/// extents.
-const CUBOID_LEN: usize = 1 + 3 + 9 + 3;
+/// Numbers a query reads of a cuboid's record: the tolerance, the centre, three axes,
+/// three half extents, in world coordinates.
+const CUBOID_QUERIED: usize = 1 + 3 + 9 + 3;
+/// Numbers in a cuboid's record: those a query reads, then the centre and the three axes
+/// in the body's frame, from which a move rewrites the record without reading the shape.
+const CUBOID_LEN: usize = CUBOID_QUERIED + 3 + 9;
 
 /// The records of the convex bodies of an index.
 #[derive(Default)]
@@ -83,6 +96,15 @@ impl Hulls {
                 cuboid: true,
             };
             self.data.resize(at + CUBOID_LEN, 0.0);
+            if let Some(b) = &shape.cuboid {
+                let rec = &mut self.data[at..at + CUBOID_LEN];
+                rec[0] = shape.surface_eps();
+                rec[13..16].copy_from_slice(&b.half);
+                rec[16..19].copy_from_slice(&b.centre.to_array());
+                for (out, a) in rec[19..28].chunks_exact_mut(3).zip(b.axes) {
+                    out.copy_from_slice(&a.to_array());
+                }
+            }
             self.pose(h, shape, pose);
             return Some(h);
         }
@@ -114,17 +136,18 @@ impl Hulls {
     /// was made by [`Hulls::add`] for `shape`.
     pub fn pose(&mut self, h: HullRef, shape: &BodyShape, pose: &Pose) {
         let rec = &mut self.data[h.at as usize..h.at as usize + h.len()];
-        rec[0] = shape.surface_eps();
         if h.cuboid {
-            if let Some(b) = &shape.cuboid {
-                rec[1..4].copy_from_slice(&pose.transform_point(b.centre).to_array());
-                for (out, a) in rec[4..13].chunks_exact_mut(3).zip(b.axes) {
-                    out.copy_from_slice(&pose.transform_vector(a).to_array());
-                }
-                rec[13..16].copy_from_slice(&b.half);
+            // From the body-frame centre and axes kept at the record's end: the shape
+            // is not read.
+            let (world, local) = rec.split_at_mut(CUBOID_QUERIED);
+            let v = |i: usize| DVec3::new(local[i], local[i + 1], local[i + 2]);
+            world[1..4].copy_from_slice(&pose.transform_point(v(0)).to_array());
+            for (k, out) in world[4..13].chunks_exact_mut(3).enumerate() {
+                out.copy_from_slice(&pose.transform_vector(v(3 + 3 * k)).to_array());
             }
             return;
         }
+        rec[0] = shape.surface_eps();
         let (planes, points) = rec[1..].split_at_mut(4 * h.faces as usize);
         for (out, f) in planes.chunks_exact_mut(4).zip(&shape.faces) {
             let n = pose.transform_vector(f.normal);
@@ -136,14 +159,14 @@ impl Hulls {
         }
     }
 
-    /// Reads the first and the last number of record `h`, which brings a cuboid's
-    /// record (128 bytes, over two or three cache lines) wholly into the cache, and the
-    /// ends of a longer one. The answer means nothing; a caller reads many records so,
+    /// Reads the first and the last number a query reads of record `h`, which brings
+    /// that part of a cuboid's record (128 bytes, over two or three cache lines) wholly
+    /// into the cache, and its ends for a longer one. The answer means nothing; a caller reads many records so,
     /// one after another, for their cache misses to overlap before it tests them.
     #[inline]
     pub fn touch(&self, h: HullRef) -> f64 {
         let at = h.at as usize;
-        self.data[at] + self.data[at + h.len() - 1]
+        self.data[at] + self.data[at + h.queried() - 1]
     }
 
     /// Gives back spare capacity (after a body-by-body build).

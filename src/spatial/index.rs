@@ -37,7 +37,8 @@ const LEAF_BOXES: usize = super::bvh::LEAF_LIMIT;
 ///
 /// Laid out for the queries: the fields a query reads of every candidate it tests through
 /// its entry (bounds, record) fill the first cache line, those a hit reads (id, name)
-/// begin the second.
+/// begin the second. A move reads and writes the entry (with the record and one path of
+/// the hierarchy), never the shape: what it needs of the shape is copied here.
 #[repr(C, align(64))]
 struct Entry {
     /// World bounds of the shape (empty for a removed body).
@@ -49,14 +50,22 @@ struct Entry {
     name: Option<Box<str>>,
     shape: Arc<BodyShape>,
     pose: Pose,
-    inverse: Pose,
+    /// The shape's bounds in the body's frame.
+    local: Aabb,
+    /// The address of the body the shape was built from (`Arc::as_ptr`), to tell an
+    /// unchanged body without reading the shape. The shape holds that body, so the
+    /// address is not reused while the entry lives.
+    body: usize,
+    /// The hierarchy leaf holding the entry, or `u32::MAX` while it is loose.
+    leaf: u32,
 }
 
 // The layout the queries rely on: bounds and record in the first line, the id at the
-// start of the second.
+// start of the second; and the whole entry in four lines.
 const _: () = assert!(
     std::mem::offset_of!(Entry, hull) + std::mem::size_of::<Option<HullRef>>() <= 64
         && std::mem::offset_of!(Entry, id) == 64
+        && std::mem::size_of::<Entry>() == 256
 );
 
 /// What a sphere query at `bodies` detail reads of an entry whose record settles it:
@@ -108,10 +117,6 @@ pub struct Spatial {
     bvh: Bvh,
     /// Parent of each hierarchy node.
     parents: Vec<u32>,
-    /// Leaf of each leaf position.
-    leaf_of: Vec<u32>,
-    /// Leaf position of each entry under the hierarchy (`u32::MAX` when loose).
-    position: Vec<u32>,
     /// Entries not under the hierarchy yet.
     loose: Vec<u32>,
     /// The records of the small convex bodies, in leaf order as of the last build.
@@ -142,8 +147,6 @@ impl Spatial {
             by_id: HashMap::with_capacity(bodies.len()),
             bvh: Bvh::default(),
             parents: Vec::new(),
-            leaf_of: Vec::new(),
-            position: Vec::new(),
             loose: Vec::new(),
             hulls: Hulls::default(),
             dead: 0,
@@ -194,7 +197,7 @@ impl Spatial {
             + self.by_id.capacity() * 16
             + self.bvh.heap_bytes()
             + self.hulls.heap_bytes()
-            + (self.parents.capacity() + self.leaf_of.capacity() + self.position.capacity()) * 4
+            + self.parents.capacity() * 4
     }
 
     /// Brings the index to `world`. `touched` lists the bodies changed since the
@@ -279,7 +282,6 @@ impl Spatial {
                 e.hull = self.hulls.add(&e.shape, &e.pose);
                 self.quick.push(Quick::of(&e));
                 self.entries.push(e);
-                self.position.push(u32::MAX);
                 self.by_id.insert(id, i);
                 self.loose.push(i);
                 stats.added += 1;
@@ -292,9 +294,9 @@ impl Spatial {
                 if e.name.as_deref() != n.name.as_deref() {
                     e.name = n.name.as_deref().map(Box::from);
                 }
-                let reshaped = !Arc::ptr_eq(e.shape.body(), &n.body);
+                let reshaped = e.body != Arc::as_ptr(&n.body) as usize;
                 if reshaped {
-                    e.shape = Arc::new(BodyShape::build(n.body.clone()));
+                    e.set_shape(Arc::new(BodyShape::build(n.body.clone())));
                     stats.shaped += 1;
                 }
                 let moved = e.pose != pose;
@@ -326,18 +328,20 @@ impl Spatial {
 
     /// Refits the hierarchy after entry `i`'s bounds changed.
     fn refit(&mut self, i: u32) {
-        let k = self.position[i as usize];
-        if k == u32::MAX {
+        let leaf = self.entries[i as usize].leaf;
+        if leaf == u32::MAX {
             return;
         }
-        let leaf = self.leaf_of[k as usize];
-        // The leaf's boxes are copied out: `refit` mutates the nodes beside the order.
+        // The leaf's boxes are copied out: `refit` mutates the nodes. Leaf position k
+        // holds entry k (see `rebuild`).
         let n = self.bvh.nodes()[leaf as usize];
         let first = n.first as usize;
-        let order = self.bvh.order();
         let mut boxes = [Aabb::EMPTY; LEAF_BOXES];
-        for (slot, k) in boxes.iter_mut().zip(first..first + n.count as usize) {
-            *slot = self.entries[order[k] as usize].bounds;
+        for (slot, e) in boxes
+            .iter_mut()
+            .zip(&self.entries[first..first + n.count as usize])
+        {
+            *slot = e.bounds;
         }
         self.growth += self.bvh.refit(&self.parents, leaf, |k| boxes[k - first]);
     }
@@ -373,8 +377,9 @@ impl Spatial {
             .map(|(i, e)| (e.id, i as u32))
             .collect();
         self.parents = self.bvh.parents();
-        self.leaf_of = self.bvh.leaf_of_positions();
-        self.position = (0..self.entries.len() as u32).collect();
+        for (e, leaf) in self.entries.iter_mut().zip(self.bvh.leaf_of_positions()) {
+            e.leaf = leaf;
+        }
         self.loose.clear();
         self.dead = 0;
         self.growth = 0.0;
@@ -414,7 +419,7 @@ impl Spatial {
                 return;
             }
             let mut f = Features::default();
-            let c = e.inverse.transform_point(q.center);
+            let c = e.pose.inverse().transform_point(q.center);
             if let Some((distance, inside)) = reach::ball(
                 &e.shape,
                 &e.pose,
@@ -470,9 +475,15 @@ impl Spatial {
             }
             let mut f = Features::default();
             let (lo, hi) = (q.min, q.max);
-            if let Some(inside) =
-                reach::aabb(&e.shape, &e.pose, &e.inverse, lo, hi, q.detail, &mut f)
-            {
+            if let Some(inside) = reach::aabb(
+                &e.shape,
+                &e.pose,
+                &e.pose.inverse(),
+                lo,
+                hi,
+                q.detail,
+                &mut f,
+            ) {
                 hits.push(body_hit(e.id, e.name.as_deref(), None, inside), f);
             }
         };
@@ -506,7 +517,7 @@ impl Spatial {
             if e.bounds.is_empty() || e.bounds.distance_squared(point) > best2 {
                 return best2;
             }
-            let c = e.inverse.transform_point(point);
+            let c = e.pose.inverse().transform_point(point);
             let inside = e.shape.contains(c);
             let limit = if inside { f64::INFINITY } else { best2 };
             let Some((k, cl)) = e.shape.nearest_face(c, limit) else {
@@ -560,8 +571,9 @@ impl Spatial {
             if e.bounds.ray_entry(origin, d).is_none_or(|t| t > t_best) {
                 return t_best;
             }
-            let o = e.inverse.transform_point(origin);
-            let db = e.inverse.transform_vector(d);
+            let inverse = e.pose.inverse();
+            let o = inverse.transform_point(origin);
+            let db = inverse.transform_vector(d);
             let mut t_best = t_best;
             e.shape
                 .bvh
@@ -689,22 +701,31 @@ fn entry(id: BodyId, name: Option<&str>, shape: Arc<BodyShape>, pose: Pose) -> E
     let mut e = Entry {
         id,
         name: name.map(Box::from),
-        inverse: Pose::IDENTITY,
+        local: shape.bounds,
+        body: Arc::as_ptr(shape.body()) as usize,
         shape,
         pose: Pose::IDENTITY,
         bounds: Aabb::EMPTY,
         hull: None,
+        leaf: u32::MAX,
     };
     e.place(pose);
     e
 }
 
 impl Entry {
-    /// Puts the entry's shape at world pose `pose`: the pose, its inverse and the world
-    /// bounds (the record, if any, is the caller's to rewrite).
+    /// Gives the entry a new shape (its world bounds are the caller's to redo, by
+    /// [`Entry::place`]).
+    fn set_shape(&mut self, shape: Arc<BodyShape>) {
+        self.local = shape.bounds;
+        self.body = Arc::as_ptr(shape.body()) as usize;
+        self.shape = shape;
+    }
+
+    /// Puts the entry's shape at world pose `pose`: the pose and the world bounds (the
+    /// record, if any, is the caller's to rewrite).
     fn place(&mut self, pose: Pose) {
-        self.bounds = self.shape.bounds.transformed(&pose);
-        self.inverse = pose.inverse();
+        self.bounds = self.local.transformed(&pose);
         self.pose = pose;
     }
 }
