@@ -161,8 +161,9 @@ impl Hulls {
 
     /// Reads the first and the last number a query reads of record `h`, which brings
     /// that part of a cuboid's record (128 bytes, over two or three cache lines) wholly
-    /// into the cache, and its ends for a longer one. The answer means nothing; a caller reads many records so,
-    /// one after another, for their cache misses to overlap before it tests them.
+    /// into the cache, and its ends for a longer one. The answer means nothing; a caller
+    /// reads many records so, one after another, for their cache misses to overlap before
+    /// it tests them.
     #[inline]
     pub fn touch(&self, h: HullRef) -> f64 {
         let at = h.at as usize;
