@@ -15,7 +15,7 @@
 use glam::DVec3;
 
 use super::exact::segment_closest;
-use super::shape::{BodyShape, NO_EDGE, REPORT_EDGE};
+use super::shape::BodyShape;
 use crate::model::Pose;
 
 /// Where one body's record lies in [`Hulls`].
@@ -110,10 +110,7 @@ impl Hulls {
         }
         for k in 0..shape.faces.len() {
             let cs = shape.corners_of(k);
-            let canonical = cs
-                .iter()
-                .enumerate()
-                .filter(|(_, c)| c.flags & REPORT_EDGE != 0 && c.edge != NO_EDGE);
+            let canonical = cs.iter().enumerate().filter(|(_, c)| c.reports_edge());
             self.edges.extend(
                 canonical.map(|(i, c)| [c.vertex as u16, cs[(i + 1) % cs.len()].vertex as u16]),
             );

@@ -701,14 +701,15 @@ fn entry(id: BodyId, name: Option<&str>, shape: Arc<BodyShape>, pose: Pose) -> E
     let mut e = Entry {
         id,
         name: name.map(Box::from),
-        local: shape.bounds,
-        body: Arc::as_ptr(shape.body()) as usize,
-        shape,
+        local: Aabb::EMPTY,
+        body: 0,
+        shape: shape.clone(),
         pose: Pose::IDENTITY,
         bounds: Aabb::EMPTY,
         hull: None,
         leaf: u32::MAX,
     };
+    e.set_shape(shape);
     e.place(pose);
     e
 }

@@ -9,7 +9,7 @@ use super::exact::{
     polygon_disc,
 };
 use super::query::{Detail, EdgeHit, FaceHit, VertexHit};
-use super::shape::{BodyShape, Closest, Corner, NO_EDGE, REPORT_EDGE, REPORT_VERTEX};
+use super::shape::{BodyShape, Closest, Corner};
 use crate::model::Pose;
 
 /// The features of one body found by a query, in world coordinates.
@@ -152,8 +152,7 @@ pub fn ball(
 /// vertex is inside the region) when its side enters the region.
 #[inline]
 fn reports(corner: &Corner, a_in: bool) -> bool {
-    (corner.flags & REPORT_EDGE != 0 && corner.edge != NO_EDGE)
-        || (corner.flags & REPORT_VERTEX != 0 && a_in)
+    corner.reports_edge() || (corner.reports_vertex() && a_in)
 }
 
 /// Appends what a perimeter corner reports of a region its segment `ab` enters over
@@ -169,13 +168,13 @@ fn report(
     world: impl Fn(DVec3) -> DVec3,
     out: &mut Features,
 ) {
-    if corner.flags & REPORT_EDGE != 0 && corner.edge != NO_EDGE {
+    if corner.reports_edge() {
         out.edges.push(EdgeHit {
             id: shape.edge_serials[corner.edge as usize],
             segment: [world(lerp_exact(a, b, t0)), world(lerp_exact(a, b, t1))],
         });
     }
-    if corner.flags & REPORT_VERTEX != 0 && a_in {
+    if corner.reports_vertex() && a_in {
         out.vertices.push(VertexHit {
             id: shape.vertex_serials[corner.vertex as usize],
             position: world(a),

@@ -44,6 +44,20 @@ pub struct Corner {
     pub flags: u8,
 }
 
+impl Corner {
+    /// Whether this corner reports its edge (the edge's canonical corner, of an edge).
+    #[inline]
+    pub fn reports_edge(&self) -> bool {
+        self.flags & REPORT_EDGE != 0 && self.edge != NO_EDGE
+    }
+
+    /// Whether this corner reports its starting vertex (the vertex's canonical corner).
+    #[inline]
+    pub fn reports_vertex(&self) -> bool {
+        self.flags & REPORT_VERTEX != 0
+    }
+}
+
 /// One face: its plane, where its corners are and its serial number.
 #[derive(Clone, Copy, Debug)]
 pub struct FaceRec {
