@@ -23,7 +23,7 @@ use super::query::{
 };
 use super::reach::{self, Features, cull_radius2};
 use super::shape::BodyShape;
-use crate::model::{Body, BodyId, Pose, World};
+use crate::model::{Body, BodyId, BodyNode, Pose, World};
 
 /// Loose entries (not yet under the hierarchy) tolerated before a rebuild.
 const LOOSE_MAX: usize = 64;
@@ -248,7 +248,9 @@ impl Spatial {
 
     /// Brings body `id`'s entry in line with `world`. Answers the body's parts when they
     /// may have moved with it: not when it has an entry whose world pose is unchanged,
-    /// nor when it is not in `world`. The body's node is looked up in the world once.
+    /// nor when it is not in `world`. The body's node is looked up in the world once; a
+    /// body that is the one its entry was made from is not read (it has geometry, or it
+    /// would have no entry).
     fn refresh<'w>(
         &mut self,
         world: &'w World,
@@ -257,8 +259,11 @@ impl Spatial {
     ) -> Option<&'w [BodyId]> {
         let found = world.node(id);
         let parts = found.map(|n| n.parts.as_slice());
-        let node = found.filter(|n| n.body.vertex_count() > 0);
         let at = self.by_id.get(&id).copied();
+        let unchanged = |n: &BodyNode| {
+            at.is_some_and(|i| self.entries[i as usize].body == Arc::as_ptr(&n.body) as usize)
+        };
+        let node = found.filter(|n| unchanged(n) || n.body.vertex_count() > 0);
         match (node, at) {
             (None, None) => parts,
             (None, Some(i)) => {
@@ -291,7 +296,8 @@ impl Spatial {
             (Some(n), Some(i)) => {
                 let pose = world.world_pose_of(id, n);
                 let e = &mut self.entries[i as usize];
-                if e.name.as_deref() != n.name.as_deref() {
+                let renamed = e.name.as_deref() != n.name.as_deref();
+                if renamed {
                     e.name = n.name.as_deref().map(Box::from);
                 }
                 let reshaped = e.body != Arc::as_ptr(&n.body) as usize;
@@ -303,11 +309,14 @@ impl Spatial {
                 if reshaped || moved {
                     let hull = e.hull;
                     e.place(pose);
+                    // A moved body keeps its record, or its lack of one (its shape is not
+                    // read); a reshaped one gets a new record.
                     e.hull = match hull {
                         Some(h) if !reshaped => {
                             self.hulls.pose(h, &e.shape, &e.pose);
                             Some(h)
                         }
+                        None if !reshaped => None,
                         _ => {
                             if let Some(h) = hull {
                                 self.hulls.release(h);
@@ -320,7 +329,10 @@ impl Spatial {
                     }
                     self.refit(i);
                 }
-                self.quick[i as usize] = Quick::of(&self.entries[i as usize]);
+                // A move leaves what a query reads first (record, id, name) as it was.
+                if renamed || reshaped {
+                    self.quick[i as usize] = Quick::of(&self.entries[i as usize]);
+                }
                 parts.filter(|_| moved)
             }
         }
@@ -797,6 +809,23 @@ mod tests {
             let hits = s.sphere(&q).expect("a query").bodies;
             let ids: Vec<u64> = hits.iter().map(|h| h.id).collect();
             assert_eq!(ids, vec![b.get()], "{detail:?}");
+        }
+    }
+
+    #[test]
+    fn a_name_given_or_taken_after_the_build_is_answered_at_bodies_detail() {
+        let (mut w, a, _) = two_boxes();
+        let mut s = Spatial::build(Arc::new(w.clone()));
+        let q = SphereQuery::new(DVec3::ZERO, 0.5).with_detail(Detail::Bodies);
+        let name = |s: &Spatial| s.sphere(&q).expect("a query").bodies[0].name.clone();
+        assert_eq!(name(&s), None);
+        for given in [Some("crate"), None] {
+            w.rename(a, given).expect("renamed");
+            // Moved too: a move alone leaves what a query reads first as it was.
+            w.set_pose(a, Pose::from_translation(DVec3::new(0.0, 0.1, 0.0)))
+                .expect("posed");
+            s.sync(Arc::new(w.clone()), Some(&[a]));
+            assert_eq!(name(&s).as_deref(), given);
         }
     }
 

@@ -6,6 +6,7 @@
 //! bash bench/spatial/run.sh terrain    # one data set (terrain or city)
 //! target/release/spatial-peers profile city 15 bodies   # winged alone, for perf
 //! target/release/spatial-peers profile-build terrain 5   # winged's builds alone
+//! target/release/spatial-peers profile-moves 2000        # winged's moves alone
 //! ```
 //!
 //! Data (`bench/spatial/data.rs`): a closed terrain solid of 1,000,000 triangles and a
@@ -632,6 +633,34 @@ fn profile(args: &[String]) {
     println!("{n} queries, {us:.2} µs each");
 }
 
+/// `profile-moves [moves]`: winged's city index alone, one body moved after each world
+/// write (the write untimed, as in the side-by-side run); p50 and mean per move.
+fn profile_moves(args: &[String]) {
+    let count: usize = args.first().and_then(|s| s.parse().ok()).unwrap_or(2000);
+    let mut city = data::city();
+    let (world, ids, _) = data::city_world(&city);
+    let mut current = Arc::new(world);
+    let mut spatial = Spatial::build(current.clone());
+    let mut rng = data::Rng::new(5);
+    let mut ns = Vec::with_capacity(count);
+    for _ in 0..count {
+        let k = (rng.next_u64() % ids.len() as u64) as usize;
+        city[k].center += DVec3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), 0.0);
+        let pose = Pose::new(city[k].center, city[k].pose().rotation).expect("a pose");
+        let next = data::moved(&current, ids[k], pose);
+        let t = Instant::now();
+        let stats = spatial.sync(next.clone(), Some(&[ids[k]]));
+        ns.push(t.elapsed().as_nanos() as f64);
+        assert_eq!(stats.moved, 1);
+        current = next;
+    }
+    let t = Timings::of(&mut ns);
+    println!(
+        "{count} moves after a world write: p50 {:.2} µs, p99 {:.2} µs, {:.2} µs each",
+        t.p50, t.p99, t.mean
+    );
+}
+
 /// `profile-build <terrain|city> [rounds]`: winged's index built again and again over
 /// one world, for `perf record`; each build's time.
 fn profile_build(args: &[String]) {
@@ -655,6 +684,7 @@ fn main() {
     match args.first().map(String::as_str) {
         Some("profile") => return profile(&args[1..]),
         Some("profile-build") => return profile_build(&args[1..]),
+        Some("profile-moves") => return profile_moves(&args[1..]),
         _ => {}
     }
     let which = args.first().cloned().unwrap_or_default();
