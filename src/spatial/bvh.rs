@@ -11,6 +11,7 @@
 //! (within rounding), and the caller runs the exact test on each primitive.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::aabb::Aabb;
 
@@ -128,30 +129,51 @@ impl Bvh {
     /// The hierarchy over `boxes` (one per primitive). Empty boxes (min > max) are
     /// kept but never met by a query.
     pub fn build(boxes: &[Aabb]) -> Bvh {
-        if boxes.is_empty() {
+        Bvh::build_by(boxes.len(), |i| boxes[i])
+    }
+
+    /// The hierarchy over `n` primitives, `box_of(i)` the box of primitive `i` (for a
+    /// caller whose boxes are not in one slice), as [`Bvh::build`] makes it. Many boxes
+    /// are read on rayon's threads.
+    pub fn build_by(n: usize, box_of: impl Fn(usize) -> Aabb + Sync) -> Bvh {
+        if n == 0 {
             return Bvh::default();
         }
-        let mut items: Vec<Item> = boxes
-            .iter()
-            .enumerate()
-            .map(|(i, b)| Item {
-                bounds: *b,
+        let item = |i: usize| {
+            let b = box_of(i);
+            Item {
+                bounds: b,
                 centroid: if b.is_empty() {
                     DVec3::ZERO
                 } else {
                     b.center()
                 },
                 index: i as u32,
-            })
-            .collect();
-        let mut nodes = Vec::with_capacity(2 * boxes.len() / LEAF_MAX + 1);
+            }
+        };
+        let (mut items, span) = if n <= PARALLEL_MIN {
+            let items: Vec<Item> = (0..n).map(item).collect();
+            let span = Span::of(&items);
+            (items, span)
+        } else {
+            let mut items = Vec::with_capacity(n);
+            (0..n)
+                .into_par_iter()
+                .map(item)
+                .collect_into_vec(&mut items);
+            let span = items
+                .par_chunks(PARALLEL_MIN)
+                .map(Span::of)
+                .reduce(|| Span::EMPTY, |a, b| a.union(&b));
+            (items, span)
+        };
+        let mut nodes = Vec::with_capacity(2 * n / LEAF_MAX + 1);
         nodes.push(Node {
             min: [0.0; 3],
             max: [0.0; 3],
             first: 0,
             count: 0,
         });
-        let span = Span::of(&items);
         split_parallel(&mut nodes, 0, &mut items, 0, span);
         Bvh {
             nodes,

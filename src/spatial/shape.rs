@@ -203,7 +203,7 @@ impl BodyShape {
             .map(|v| vix[v.index()])
             .collect();
         // Faces, their corners (`start` counted from the first face given) and boxes.
-        let lay = |ids: &[FaceId]| {
+        let lay = |ids: &[FaceId]| -> Laid {
             let mut faces = Vec::with_capacity(ids.len());
             let mut corners = Vec::with_capacity(4 * ids.len());
             let mut boxes = Vec::with_capacity(ids.len());
@@ -256,36 +256,17 @@ impl BodyShape {
             (faces, corners, boxes)
         };
         let ids: Vec<FaceId> = b.faces().collect();
-        let (faces, corners, boxes) = if ids.len() <= PARALLEL_FACES {
-            lay(&ids)
+        // Laid out in chunks of PARALLEL_FACES faces (on rayon's threads when there are
+        // several), each with its own corners, and read where they lie.
+        let chunks: Vec<Laid> = if ids.len() <= PARALLEL_FACES {
+            vec![lay(&ids)]
         } else {
-            // In chunks on rayon's threads, then joined with the corner starts moved on.
-            let parts: Vec<_> = ids.par_chunks(PARALLEL_FACES).map(lay).collect();
-            let mut faces = Vec::with_capacity(ids.len());
-            let mut corners = Vec::with_capacity(parts.iter().map(|p| p.1.len()).sum());
-            let mut boxes = Vec::with_capacity(ids.len());
-            for (f, c, bx) in parts {
-                let base = corners.len() as u32;
-                faces.extend(f.into_iter().map(|f| FaceRec {
-                    start: f.start + base,
-                    ..f
-                }));
-                corners.extend_from_slice(&c);
-                boxes.extend_from_slice(&bx);
-            }
-            (faces, corners, boxes)
+            ids.par_chunks(PARALLEL_FACES).map(lay).collect()
         };
-        let bvh = Bvh::build(&boxes);
-        // Lay faces and their corners out in leaf order.
-        let mut ordered = Vec::with_capacity(faces.len());
-        let mut ordered_corners = Vec::with_capacity(corners.len());
-        for &i in bvh.order() {
-            let mut f = faces[i as usize];
-            let s = f.start as usize;
-            f.start = ordered_corners.len() as u32;
-            ordered_corners.extend_from_slice(&corners[s..s + f.len as usize]);
-            ordered.push(f);
-        }
+        let bvh = Bvh::build_by(ids.len(), |i| {
+            chunks[i / PARALLEL_FACES].2[i % PARALLEL_FACES]
+        });
+        let (ordered, ordered_corners) = in_leaf_order(&bvh, &chunks);
         let bounds = Aabb::of_points(points.iter().copied());
         let size = if bounds.is_empty() {
             0.0
@@ -542,6 +523,76 @@ const PROBES: [[f64; 3]; 6] = [
     [-0.231_049_060_2, 0.105_360_515_7, -0.967_078_543_2],
 ];
 
+/// Faces (with `start` counted within their chunk), their corners and their boxes, for
+/// one chunk of a body's faces.
+type Laid = (Vec<FaceRec>, Vec<Corner>, Vec<Aabb>);
+
+/// The faces of `chunks` (face `i` is the `i % PARALLEL_FACES`-th of chunk
+/// `i / PARALLEL_FACES`) and their corners laid out in `bvh`'s leaf order, each face's
+/// `start` renumbered: on rayon's threads when there are many.
+fn in_leaf_order(bvh: &Bvh, chunks: &[Laid]) -> (Vec<FaceRec>, Vec<Corner>) {
+    let order = bvh.order();
+    let face = |i: usize| &chunks[i / PARALLEL_FACES].0[i % PARALLEL_FACES];
+    let corners_of = |i: usize| {
+        let f = face(i);
+        let s = f.start as usize;
+        &chunks[i / PARALLEL_FACES].1[s..s + f.len as usize]
+    };
+    if order.len() <= PARALLEL_FACES {
+        let mut faces = Vec::with_capacity(order.len());
+        let mut corners = Vec::with_capacity(chunks.iter().map(|c| c.1.len()).sum());
+        for &i in order {
+            let f = face(i as usize);
+            faces.push(FaceRec {
+                start: corners.len() as u32,
+                ..*f
+            });
+            corners.extend_from_slice(corners_of(i as usize));
+        }
+        return (faces, corners);
+    }
+    // Where each face's corners start, then faces and corners written in place, a range
+    // of leaf positions per task.
+    let mut starts = Vec::with_capacity(order.len() + 1);
+    let mut at = 0u32;
+    for &i in order {
+        starts.push(at);
+        at += face(i as usize).len;
+    }
+    starts.push(at);
+    let mut faces = Vec::with_capacity(order.len());
+    (0..order.len())
+        .into_par_iter()
+        .map(|k| FaceRec {
+            start: starts[k],
+            ..*face(order[k] as usize)
+        })
+        .collect_into_vec(&mut faces);
+    let blank = Corner {
+        vertex: 0,
+        edge: NO_EDGE,
+        flags: 0,
+    };
+    let mut corners = vec![blank; at as usize];
+    let mut ranges = Vec::new();
+    let mut rest = corners.as_mut_slice();
+    for k in (0..order.len()).step_by(PARALLEL_FACES) {
+        let end = (k + PARALLEL_FACES).min(order.len());
+        let (mine, more) = rest.split_at_mut((starts[end] - starts[k]) as usize);
+        ranges.push((k..end, mine));
+        rest = more;
+    }
+    ranges.into_par_iter().for_each(|(ks, out)| {
+        let mut at = 0;
+        for k in ks {
+            let c = corners_of(order[k] as usize);
+            out[at..at + c.len()].copy_from_slice(c);
+            at += c.len();
+        }
+    });
+    (faces, corners)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -568,12 +619,17 @@ mod tests {
             let plane = b.face_plane(f).expect("a plane");
             assert_eq!((rec.normal, rec.offset), (plane.normal, plane.offset));
         }
-        // And the hierarchy's boxes hold their faces.
-        let mut visited = 0;
-        shape.bvh.within(DVec3::ZERO, 100.0, |k| {
-            visited += 1;
-            assert!(shape.loop_points(k).all(|p| shape.bounds.contains_point(p)));
-        });
-        assert_eq!(visited, shape.faces.len());
+        // And each face sits at its leaf position: its leaf's box holds it.
+        let mut placed = 0;
+        for n in shape.bvh.nodes().iter().filter(|n| n.is_leaf()) {
+            let lo = DVec3::from_array(n.min.map(f64::from));
+            let hi = DVec3::from_array(n.max.map(f64::from));
+            for k in n.first..n.first + n.count {
+                placed += 1;
+                let inside = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
+                assert!(shape.loop_points(k as usize).all(inside), "position {k}");
+            }
+        }
+        assert_eq!(placed, shape.faces.len());
     }
 }

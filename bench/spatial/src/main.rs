@@ -6,7 +6,7 @@
 //! bash bench/spatial/run.sh terrain    # one data set (terrain or city)
 //! target/release/spatial-peers profile city 15 bodies   # winged alone, for perf
 //! target/release/spatial-peers profile-build terrain 5   # winged's builds alone
-//! target/release/spatial-peers profile-moves 2000        # winged's moves alone
+//! target/release/spatial-peers profile-moves 2000        # winged's moves, and a read
 //! ```
 //!
 //! Data (`bench/spatial/data.rs`): a closed terrain solid of 1,000,000 triangles and a
@@ -633,8 +633,11 @@ fn profile(args: &[String]) {
     println!("{n} queries, {us:.2} µs each");
 }
 
-/// `profile-moves [moves]`: winged's city index alone, one body moved after each world
-/// write (the write untimed, as in the side-by-side run); p50 and mean per move.
+/// `profile-moves [moves] [log2 entries]`: winged's city index alone, one body moved
+/// after each world write (the write untimed, as in the side-by-side run); p50 and mean
+/// per move. For scale, the cost of one memory read on this machine after such a write:
+/// a chase of dependent reads through a random cycle of `2^log2` 4-byte entries (2^23,
+/// 32 MiB, by default), timed right after another write.
 fn profile_moves(args: &[String]) {
     let count: usize = args.first().and_then(|s| s.parse().ok()).unwrap_or(2000);
     let mut city = data::city();
@@ -643,6 +646,11 @@ fn profile_moves(args: &[String]) {
     let mut spatial = Spatial::build(current.clone());
     let mut rng = data::Rng::new(5);
     let mut ns = Vec::with_capacity(count);
+    let chase_log2: u32 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(23).min(30);
+    let cycle = random_cycle(1 << chase_log2, 9);
+    let mut reads = Vec::with_capacity(count);
+    // The index's world, held here too so that no sync frees a world in its timing.
+    let mut held = current.clone();
     for _ in 0..count {
         let k = (rng.next_u64() % ids.len() as u64) as usize;
         city[k].center += DVec3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), 0.0);
@@ -652,13 +660,47 @@ fn profile_moves(args: &[String]) {
         let stats = spatial.sync(next.clone(), Some(&[ids[k]]));
         ns.push(t.elapsed().as_nanos() as f64);
         assert_eq!(stats.moved, 1);
-        current = next;
+        // Another write (the same pose again), then CHASE dependent reads.
+        current = data::moved(&next, ids[k], pose);
+        held = next;
+        let mut at = (rng.next_u64() % cycle.len() as u64) as usize;
+        let t = Instant::now();
+        for _ in 0..CHASE {
+            at = cycle[at] as usize;
+        }
+        reads.push(t.elapsed().as_nanos() as f64 / CHASE as f64);
+        std::hint::black_box(at);
     }
+    drop(held);
     let t = Timings::of(&mut ns);
     println!(
         "{count} moves after a world write: p50 {:.2} µs, p99 {:.2} µs, {:.2} µs each",
         t.p50, t.p99, t.mean
     );
+    let r = Timings::of(&mut reads);
+    println!(
+        "one read of a {} KiB array after a world write, chased {CHASE} deep: p50 {:.0} ns",
+        (4usize << chase_log2) >> 10,
+        r.p50 * 1e3
+    );
+}
+
+/// Dependent reads per chase in `profile-moves`.
+const CHASE: usize = 8;
+
+/// A single cycle through `0..n` in random order (Sattolo's shuffle): `next[i]`.
+fn random_cycle(n: usize, seed: u64) -> Vec<u32> {
+    let mut rng = data::Rng::new(seed);
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    for i in (1..n).rev() {
+        let j = (rng.next_u64() % i as u64) as usize;
+        order.swap(i, j);
+    }
+    let mut next = vec![0u32; n];
+    for w in 0..n {
+        next[order[w] as usize] = order[(w + 1) % n];
+    }
+    next
 }
 
 /// `profile-build <terrain|city> [rounds]`: winged's index built again and again over
