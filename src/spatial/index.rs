@@ -401,8 +401,24 @@ impl Spatial {
     /// The bodies reaching into a ball, with what of them is inside it.
     pub fn sphere(&self, q: &SphereQuery) -> Result<SphereAnswer, QueryError> {
         q.validate()?;
-        let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies);
         let r2 = cull_radius2(q.radius);
+        // The candidates are gathered first and their records touched in one tight loop
+        // of independent reads, so that the cache misses of a query overlap instead of
+        // following one another through the tests. Leaf position k holds entry k (see
+        // `rebuild`).
+        let mut candidates: Vec<u32> = Vec::with_capacity(64);
+        self.bvh.within(q.center, r2, |k| candidates.push(k as u32));
+        candidates.extend_from_slice(&self.loose);
+        if q.detail == Detail::Bodies {
+            let touched = candidates
+                .iter()
+                .filter_map(|&i| self.quick[i as usize].hull)
+                .map(|h| self.hulls.touch(h))
+                .sum::<f64>();
+            std::hint::black_box(touched);
+        }
+        // Most candidates are hits: room for them all, made once.
+        let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies, candidates.len());
         let mut test = |i: usize| {
             if hits.full {
                 return;
@@ -444,21 +460,6 @@ impl Spatial {
                 hits.push(body_hit(e.id, e.name.as_deref(), Some(distance), inside), f);
             }
         };
-        // The candidates are gathered first and their records touched in one tight loop
-        // of independent reads, so that the cache misses of a query overlap instead of
-        // following one another through the tests. Leaf position k holds entry k (see
-        // `rebuild`).
-        let mut candidates: Vec<u32> = Vec::with_capacity(64);
-        self.bvh.within(q.center, r2, |k| candidates.push(k as u32));
-        candidates.extend_from_slice(&self.loose);
-        if q.detail == Detail::Bodies {
-            let touched = candidates
-                .iter()
-                .filter_map(|&i| self.quick[i as usize].hull)
-                .map(|h| self.hulls.touch(h))
-                .sum::<f64>();
-            std::hint::black_box(touched);
-        }
         for &i in &candidates {
             test(i as usize);
         }
@@ -480,7 +481,7 @@ impl Spatial {
     pub fn aabb(&self, q: &BoxQuery) -> Result<BoxAnswer, QueryError> {
         q.validate()?;
         let region = Aabb::new(q.min, q.max);
-        let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies);
+        let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies, 0);
         let mut visit = |e: &Entry| {
             if hits.full || !e.bounds.overlaps(&region) {
                 return;
@@ -642,10 +643,11 @@ struct Hits {
 }
 
 impl Hits {
-    fn new(detail: Detail, limit: usize, max_bodies: usize) -> Hits {
+    /// No hits yet, with room for `room` bodies (at most `max_bodies`).
+    fn new(detail: Detail, limit: usize, max_bodies: usize, room: usize) -> Hits {
         Hits {
             detail,
-            bodies: Vec::new(),
+            bodies: Vec::with_capacity(room.min(max_bodies)),
             features: 0,
             limit,
             max_bodies,
