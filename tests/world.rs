@@ -745,6 +745,61 @@ fn a_snapshot_keeps_the_old_geometry_and_shares_the_rest() {
     assert_sound(&snap);
 }
 
+/// Nodes of `a` that are the very nodes of `b` (the same memory, not equal copies).
+fn shared_nodes(a: &World, b: &World) -> usize {
+    a.bodies()
+        .filter(|(id, n)| b.node(*id).is_some_and(|m| std::ptr::eq(*n, m)))
+        .count()
+}
+
+#[test]
+fn a_snapshot_of_many_bodies_shares_every_node_a_write_does_not_reach() {
+    let mut w = World::new();
+    let root = w.root();
+    let ids: Vec<BodyId> = (0..2000)
+        .map(|i| {
+            cube_at(
+                &mut w,
+                &format!("c{i}"),
+                root,
+                DVec3::new(i as f64, 0.0, 0.0),
+            )
+        })
+        .collect();
+    let snap = w.clone();
+    assert_eq!(shared_nodes(&w, &snap), 2000);
+    // A move copies the moved body's node and a few of its neighbours in the map, no more.
+    let moved = ids[1234];
+    w.set_pose(moved, Pose::from_translation(DVec3::new(0.0, 9.0, 0.0)))
+        .unwrap();
+    let shared = shared_nodes(&w, &snap);
+    assert!((1900..2000).contains(&shared), "{shared} of 2000 shared");
+    assert!(!std::ptr::eq(
+        w.node(moved).unwrap(),
+        snap.node(moved).unwrap()
+    ));
+    // The snapshot still has every body where it was; the world has the move.
+    for (i, &id) in ids.iter().enumerate() {
+        let at = snap.world_pose(id).unwrap().position;
+        assert!(at.abs_diff_eq(DVec3::new(i as f64, 0.0, 0.0), 0.0), "{id}");
+    }
+    assert_eq!(
+        w.world_pose(moved).unwrap().position,
+        DVec3::new(0.0, 9.0, 0.0)
+    );
+    // A rename and a kill reach the snapshot's names no more than its nodes.
+    w.rename(ids[7], Some("seventh")).unwrap();
+    w.kill(ids[8]).unwrap();
+    assert_eq!(snap.find_by_name("c7"), Some(ids[7]));
+    assert_eq!(snap.find_by_name("seventh"), None);
+    assert!(snap.node(ids[8]).is_some());
+    assert_eq!(w.find_by_name("seventh"), Some(ids[7]));
+    assert_eq!(w.find_by_name("c7"), None);
+    assert!(w.node(ids[8]).is_none());
+    assert_sound(&w);
+    assert_sound(&snap);
+}
+
 #[test]
 fn a_failed_edit_leaves_the_world_exactly_as_it_was() {
     let mut w = World::new();
