@@ -114,7 +114,8 @@ pub struct BodyShape {
     /// (so that the solid has volume). The solid is then the intersection of its faces'
     /// half-spaces, which [`BodyShape::plane_side`] tests.
     pub convex: bool,
-    /// The cuboid the solid is, when it is one (see [`Cuboid::of`]).
+    /// The cuboid the solid is, when it is one: a convex solid of six faces and eight
+    /// vertices whose faces pair off into three opposite pairs at right angles.
     pub cuboid: Option<Cuboid>,
 }
 

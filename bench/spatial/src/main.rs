@@ -634,8 +634,8 @@ fn profile(args: &[String]) {
 }
 
 /// `profile-moves [moves] [log2 entries]`: winged's city index alone, one body moved
-/// after each world write (the write untimed, as in the side-by-side run); p50 and mean
-/// per move. For scale, the cost of one memory read on this machine after such a write:
+/// after each world write (the write timed apart, as in the side-by-side run); p50 and
+/// mean per move, and per write. For scale, the cost of one memory read on this machine after such a write:
 /// a chase of dependent reads through a random cycle of `2^log2` 4-byte entries (2^23,
 /// 32 MiB, by default), timed right after another write.
 fn profile_moves(args: &[String]) {
@@ -649,13 +649,16 @@ fn profile_moves(args: &[String]) {
     let chase_log2: u32 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(23).min(30);
     let cycle = random_cycle(1 << chase_log2, 9);
     let mut reads = Vec::with_capacity(count);
+    let mut writes = Vec::with_capacity(count);
     // The index's world, held here too so that no sync frees a world in its timing.
     let mut held = current.clone();
     for _ in 0..count {
         let k = (rng.next_u64() % ids.len() as u64) as usize;
         city[k].center += DVec3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), 0.0);
         let pose = Pose::new(city[k].center, city[k].pose().rotation).expect("a pose");
+        let t = Instant::now();
         let next = data::moved(&current, ids[k], pose);
+        writes.push(t.elapsed().as_nanos() as f64);
         let t = Instant::now();
         let stats = spatial.sync(next.clone(), Some(&[ids[k]]));
         ns.push(t.elapsed().as_nanos() as f64);
@@ -676,6 +679,11 @@ fn profile_moves(args: &[String]) {
     println!(
         "{count} moves after a world write: p50 {:.2} µs, p99 {:.2} µs, {:.2} µs each",
         t.p50, t.p99, t.mean
+    );
+    let w = Timings::of(&mut writes);
+    println!(
+        "the world writes themselves (clone, pose the body): p50 {:.2} µs, p99 {:.2} µs",
+        w.p50, w.p99
     );
     let r = Timings::of(&mut reads);
     println!(
