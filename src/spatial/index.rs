@@ -23,7 +23,7 @@ use super::query::{
 };
 use super::reach::{self, Features, cull_radius2};
 use super::shape::BodyShape;
-use crate::model::{Body, BodyId, BodyNode, Pose, World};
+use crate::model::{BodyId, BodyNode, Pose, World};
 
 /// Loose entries (not yet under the hierarchy) tolerated before a rebuild.
 const LOOSE_MAX: usize = 64;
@@ -131,14 +131,15 @@ pub struct Spatial {
 impl Spatial {
     /// The index of `world`, shapes built in parallel.
     pub fn build(world: Arc<World>) -> Spatial {
-        let bodies: Vec<(BodyId, Arc<Body>)> = world
+        // Each body's node is read once, here: its pose and name come from it, not from
+        // looking the body up again.
+        let bodies: Vec<(BodyId, &BodyNode)> = world
             .bodies()
             .filter(|(_, n)| n.body.vertex_count() > 0)
-            .map(|(id, n)| (id, n.body.clone()))
             .collect();
         let shapes: Vec<Arc<BodyShape>> = bodies
             .par_iter()
-            .map(|(_, b)| Arc::new(BodyShape::build(b.clone())))
+            .map(|(_, n)| Arc::new(BodyShape::build(n.body.clone())))
             .collect();
         let mut s = Spatial {
             world: world.clone(),
@@ -153,10 +154,10 @@ impl Spatial {
             growth: 0.0,
             built_area: 0.0,
         };
-        for ((id, _), shape) in bodies.into_iter().zip(shapes) {
-            let pose = world.world_pose(id).unwrap_or_default();
+        for ((id, n), shape) in bodies.into_iter().zip(shapes) {
+            let pose = world.world_pose_of(id, n);
             s.by_id.insert(id, s.entries.len() as u32);
-            s.entries.push(entry(id, world.name(id), shape, pose));
+            s.entries.push(entry(id, n.name.as_deref(), shape, pose));
         }
         s.rebuild();
         s
