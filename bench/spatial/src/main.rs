@@ -635,9 +635,9 @@ fn profile(args: &[String]) {
 
 /// `profile-moves [moves] [log2 entries]`: winged's city index alone, one body moved
 /// after each world write (the write timed apart, as in the side-by-side run); p50 and
-/// mean per move, and per write. For scale, the cost of one memory read on this machine after such a write:
-/// a chase of dependent reads through a random cycle of `2^log2` 4-byte entries (2^23,
-/// 32 MiB, by default), timed right after another write.
+/// mean per move, and per write. For scale, the cost of one memory read on this machine
+/// after such a write: a chase of dependent reads through a random cycle of `2^log2`
+/// 4-byte entries (2^23, 32 MiB, by default), timed right after another write.
 fn profile_moves(args: &[String]) {
     let count: usize = args.first().and_then(|s| s.parse().ok()).unwrap_or(2000);
     let mut city = data::city();
