@@ -261,10 +261,11 @@ impl Spatial {
         let found = world.node(id);
         let parts = found.map(|n| n.parts.as_slice());
         let at = self.by_id.get(&id).copied();
-        let unchanged = |n: &BodyNode| {
-            at.is_some_and(|i| self.entries[i as usize].body == Arc::as_ptr(&n.body) as usize)
-        };
-        let node = found.filter(|n| unchanged(n) || n.body.vertex_count() > 0);
+        // Whether the body is the very one the entry was made from.
+        let kept = found
+            .zip(at)
+            .is_some_and(|(n, i)| self.entries[i as usize].body == Arc::as_ptr(&n.body) as usize);
+        let node = found.filter(|n| kept || n.body.vertex_count() > 0);
         match (node, at) {
             (None, None) => parts,
             (None, Some(i)) => {
@@ -301,7 +302,7 @@ impl Spatial {
                 if renamed {
                     e.name = n.name.as_deref().map(Box::from);
                 }
-                let reshaped = e.body != Arc::as_ptr(&n.body) as usize;
+                let reshaped = !kept;
                 if reshaped {
                     e.set_shape(Arc::new(BodyShape::build(n.body.clone())));
                     stats.shaped += 1;

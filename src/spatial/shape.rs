@@ -254,7 +254,11 @@ impl BodyShape {
                     serial: b.face_serial(f).get(),
                 });
             }
-            (faces, corners, boxes)
+            Laid {
+                faces,
+                corners,
+                boxes,
+            }
         };
         let ids: Vec<FaceId> = b.faces().collect();
         // Laid out in chunks of PARALLEL_FACES faces (on rayon's threads when there are
@@ -265,7 +269,7 @@ impl BodyShape {
             ids.par_chunks(PARALLEL_FACES).map(lay).collect()
         };
         let bvh = Bvh::build_by(ids.len(), |i| {
-            chunks[i / PARALLEL_FACES].2[i % PARALLEL_FACES]
+            chunks[i / PARALLEL_FACES].boxes[i % PARALLEL_FACES]
         });
         let (ordered, ordered_corners) = in_leaf_order(&bvh, &chunks);
         let bounds = Aabb::of_points(points.iter().copied());
@@ -524,24 +528,28 @@ const PROBES: [[f64; 3]; 6] = [
     [-0.231_049_060_2, 0.105_360_515_7, -0.967_078_543_2],
 ];
 
-/// Faces (with `start` counted within their chunk), their corners and their boxes, for
-/// one chunk of a body's faces.
-type Laid = (Vec<FaceRec>, Vec<Corner>, Vec<Aabb>);
+/// One chunk of a body's faces, laid out: the faces (each `start` counted within the
+/// chunk's `corners`), their corners, and each face's box.
+struct Laid {
+    faces: Vec<FaceRec>,
+    corners: Vec<Corner>,
+    boxes: Vec<Aabb>,
+}
 
 /// The faces of `chunks` (face `i` is the `i % PARALLEL_FACES`-th of chunk
 /// `i / PARALLEL_FACES`) and their corners laid out in `bvh`'s leaf order, each face's
 /// `start` renumbered: on rayon's threads when there are many.
 fn in_leaf_order(bvh: &Bvh, chunks: &[Laid]) -> (Vec<FaceRec>, Vec<Corner>) {
     let order = bvh.order();
-    let face = |i: usize| &chunks[i / PARALLEL_FACES].0[i % PARALLEL_FACES];
+    let face = |i: usize| &chunks[i / PARALLEL_FACES].faces[i % PARALLEL_FACES];
     let corners_of = |i: usize| {
         let f = face(i);
         let s = f.start as usize;
-        &chunks[i / PARALLEL_FACES].1[s..s + f.len as usize]
+        &chunks[i / PARALLEL_FACES].corners[s..s + f.len as usize]
     };
     if order.len() <= PARALLEL_FACES {
         let mut faces = Vec::with_capacity(order.len());
-        let mut corners = Vec::with_capacity(chunks.iter().map(|c| c.1.len()).sum());
+        let mut corners = Vec::with_capacity(chunks.iter().map(|c| c.corners.len()).sum());
         for &i in order {
             let f = face(i as usize);
             faces.push(FaceRec {
