@@ -483,6 +483,94 @@ fn an_index_older_than_the_change_history_catches_up_by_comparing_every_body() {
     assert_eq!(ids(&up["bodies"]), vec![a]);
 }
 
+/// The value of the spatial index build counter for `how`, from `GET /metrics` (0 when
+/// no such build was counted yet).
+fn index_builds(s: &TestServer, how: &str) -> u64 {
+    let r = s.get("/metrics");
+    assert_eq!(r.status, 200, "{}", r.text);
+    let prefix = format!("winged_spatial_index_builds_total{{how=\"{how}\"}} ");
+    r.text
+        .lines()
+        .find_map(|l| l.strip_prefix(&prefix))
+        .map_or(0, |v| v.trim().parse().expect("a count"))
+}
+
+#[test]
+fn a_worn_index_is_rebuilt_off_the_lock_while_answers_follow_every_write() {
+    let s = TestServer::start();
+    let origin = add_box(&s, "origin", [0.0; 3]);
+    let all = "/v1/spatial/box?min_x=-2&min_y=-2&min_z=-2&max_x=400&max_y=2&max_z=2&detail=bodies";
+    assert_eq!(ids(&s.get(all).ok()["bodies"]), vec![origin]);
+    assert_eq!(index_builds(&s, "first"), 1);
+    // More new bodies than the index keeps loose: the query that syncs them finds the
+    // index worn and starts a rebuild off the lock; it answers from the worn index.
+    let row: Vec<u64> = (1..=80)
+        .map(|k| add_box(&s, &format!("row {k}"), [4.0 * f64::from(k), 0.0, 0.0]))
+        .collect();
+    let mut expected = vec![origin];
+    expected.extend(&row);
+    let found = s.get(all).ok();
+    assert_eq!(found["revision"], revision(&s));
+    assert_eq!(ids(&found["bodies"]), expected);
+    // Writes while the rebuild may run are answered at once, and the fresh index
+    // catches up with them before it takes the worn one's place.
+    let mut moved = Vec::new();
+    for (k, &id) in row.iter().enumerate().step_by(10) {
+        s.patch(
+            &format!("/v1/bodies/{id}"),
+            &json!({"pose": {"position": [4.0 * (k + 1) as f64, 50.0, 0.0]}}),
+        )
+        .ok();
+        moved.push(id);
+        let here = s.get(all).ok();
+        assert_eq!(here["revision"], revision(&s));
+        let left: Vec<u64> = expected
+            .iter()
+            .copied()
+            .filter(|i| !moved.contains(i))
+            .collect();
+        assert_eq!(ids(&here["bodies"]), left);
+    }
+    let started = std::time::Instant::now();
+    while index_builds(&s, "background") == 0 {
+        assert!(
+            started.elapsed().as_secs() < 60,
+            "no background rebuild counted in a minute"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    assert_eq!(
+        index_builds(&s, "in_place"),
+        0,
+        "no query waited for a rebuild"
+    );
+    // The fresh index answers every write, those made during its build included.
+    let rev = revision(&s);
+    let after = s.get(all).ok();
+    assert_eq!(after["revision"], rev);
+    let left: Vec<u64> = expected
+        .iter()
+        .copied()
+        .filter(|i| !moved.contains(i))
+        .collect();
+    assert_eq!(ids(&after["bodies"]), left);
+    let up = s
+        .get("/v1/spatial/box?min_x=-2&min_y=48&min_z=-2&max_x=400&max_y=52&max_z=2&detail=bodies")
+        .ok();
+    let mut moved_sorted = moved.clone();
+    moved_sorted.sort_unstable();
+    assert_eq!(ids(&up["bodies"]), moved_sorted);
+    // And goes on following writes.
+    let last = row[79];
+    s.delete(&format!("/v1/bodies/{last}")).ok();
+    let gone = s
+        .get("/v1/spatial/sphere?x=320&y=0&z=0&r=1.5&detail=bodies")
+        .ok();
+    assert_eq!(gone["bodies"], json!([]), "{gone}");
+    let near = s.get("/v1/spatial/nearest?x=330&y=0&z=0").ok();
+    assert_eq!(near["hit"]["id"], row[78], "{near}");
+}
+
 #[test]
 fn bad_requests_are_problems_and_change_nothing() {
     let s = TestServer::start();

@@ -140,8 +140,10 @@ kill "$mover" 2>/dev/null || true
 wait "$mover" 2>/dev/null || true
 after=$(curl -sS "$url/v1/world" | sed -E 's/.*"revision":([0-9]+).*/\1/')
 echo "== $((after - before)) moves during the last run (${MOVES_PER_SECOND}/s asked)"
-echo "== the index was synced $(grep -ac 'spatial index synced' "$log" || true) times," \
-    "$(grep -ac 'rebuilt=true' "$log" || true) of them with a rebuild; the slowest and the last:"
+echo "== the index was rebuilt $(grep -ac 'spatial index rebuilt off the lock' "$log" || true) times" \
+    "off the lock (the last: $(grep -a 'spatial index rebuilt off the lock' "$log" | tail -1 | sed 's/.*INFO //'))" \
+    "and $(grep -ac 'spatial index rebuilt in place' "$log" || true) times in place"
+echo "== the index was synced $(grep -ac 'spatial index synced' "$log" || true) times; the slowest and the last:"
 grep -a 'spatial index synced' "$log" | awk -F'elapsed_ms=' '{print $2 + 0, $0}' | sort -g | tail -1 |
     cut -d' ' -f2- | sed 's/.*DEBUG //' || true
 grep -a 'spatial index synced' "$log" | tail -1 | sed 's/.*DEBUG //' || true

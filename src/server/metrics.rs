@@ -56,6 +56,39 @@ struct RequestLabels {
 
 type HistogramFamily = Family<RequestLabels, Histogram, fn() -> Histogram>;
 
+/// How the spatial index came to be built.
+#[derive(Clone, Copy, Debug, Hash, PartialEq, Eq)]
+pub enum IndexBuild {
+    /// The first build, by the first query.
+    First,
+    /// A rebuild of a worn index under its lock (queries wait for it).
+    InPlace,
+    /// A rebuild on a thread of its own that took the worn index's place (queries went
+    /// on with the worn index meanwhile).
+    Background,
+    /// A rebuild on a thread of its own that was dropped: the index had been rebuilt in
+    /// place meanwhile.
+    Dropped,
+}
+
+impl IndexBuild {
+    /// The label value.
+    fn label(self) -> &'static str {
+        match self {
+            IndexBuild::First => "first",
+            IndexBuild::InPlace => "in_place",
+            IndexBuild::Background => "background",
+            IndexBuild::Dropped => "dropped",
+        }
+    }
+}
+
+/// Labels of the spatial index build counter.
+#[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
+struct IndexBuildLabels {
+    how: &'static str,
+}
+
 fn request_duration_histogram() -> Histogram {
     // 100 µs .. 30 s, 20 buckets (a factor of about 1.94 apart).
     Histogram::new(exponential_buckets_range(0.000_1, 30.0, 20))
@@ -78,6 +111,8 @@ pub struct Metrics {
     world_edges: Gauge,
     world_vertices: Gauge,
     snapshot_duration: Histogram,
+    index_builds: Family<IndexBuildLabels, Counter>,
+    index_build_duration: Histogram,
 }
 
 impl std::fmt::Debug for Metrics {
@@ -178,6 +213,21 @@ impl Metrics {
             snapshot_duration.clone(),
         );
 
+        let index_builds = Family::<IndexBuildLabels, Counter>::default();
+        registry.register(
+            "winged_spatial_index_builds",
+            "Builds of the spatial index's hierarchy, by how: first, in_place (queries waited), background (queries went on), dropped (a background build overtaken)",
+            index_builds.clone(),
+        );
+        // 100 µs .. 100 s.
+        let index_build_duration = Histogram::new(exponential_buckets_range(0.000_1, 100.0, 19));
+        registry.register_with_unit(
+            "winged_spatial_index_build_duration",
+            "Time to build the spatial index's hierarchy (a background build's catching up not included)",
+            Unit::Seconds,
+            index_build_duration.clone(),
+        );
+
         Metrics {
             registry,
             requests,
@@ -192,6 +242,20 @@ impl Metrics {
             world_edges,
             world_vertices,
             snapshot_duration,
+            index_builds,
+            index_build_duration,
+        }
+    }
+
+    /// Records one build of the spatial index's hierarchy, made `how`, that took
+    /// `elapsed` (a dropped build is counted and not timed: its time was counted when it
+    /// was built).
+    pub fn observe_index_build(&self, how: IndexBuild, elapsed: Duration) {
+        self.index_builds
+            .get_or_create(&IndexBuildLabels { how: how.label() })
+            .inc();
+        if how != IndexBuild::Dropped {
+            self.index_build_duration.observe(elapsed.as_secs_f64());
         }
     }
 
@@ -360,6 +424,10 @@ mod tests {
         m.reject_overload();
         m.set_world(42, 2, 12, 24, 16);
         m.observe_snapshot(Duration::from_millis(250));
+        m.observe_index_build(IndexBuild::First, Duration::from_millis(90));
+        m.observe_index_build(IndexBuild::Background, Duration::from_millis(40));
+        m.observe_index_build(IndexBuild::Background, Duration::from_millis(50));
+        m.observe_index_build(IndexBuild::Dropped, Duration::ZERO);
         let text = m.render();
         for family in [
             "# TYPE winged_http_requests counter",
@@ -374,6 +442,8 @@ mod tests {
             "# TYPE winged_world_edges gauge",
             "# TYPE winged_world_vertices gauge",
             "# TYPE winged_snapshot_duration_seconds histogram",
+            "# TYPE winged_spatial_index_builds counter",
+            "# TYPE winged_spatial_index_build_duration_seconds histogram",
         ] {
             assert!(text.contains(family), "{family} missing from\n{text}");
         }
@@ -406,6 +476,22 @@ mod tests {
                 "winged_snapshot_duration_seconds_bucket{le=\"+Inf\"} "
             ),
             Some(1.0)
+        );
+        assert_eq!(
+            sample(
+                &text,
+                "winged_spatial_index_builds_total{how=\"background\"} "
+            ),
+            Some(2.0)
+        );
+        assert_eq!(
+            sample(&text, "winged_spatial_index_builds_total{how=\"dropped\"} "),
+            Some(1.0)
+        );
+        // The dropped build is not timed again.
+        assert_eq!(
+            sample(&text, "winged_spatial_index_build_duration_seconds_count "),
+            Some(3.0)
         );
         m.set_world(u64::MAX, 0, 0, 0, 0);
         assert_eq!(

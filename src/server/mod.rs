@@ -132,7 +132,7 @@ pub fn build<J: Journal>(
         tokens,
         metrics: metrics.clone(),
         appearance: Arc::new(api::appearance::Appearance::new(limits.max_render_pixels)),
-        spatial: Arc::new(api::spatial::SpatialAccess::new()),
+        spatial: Arc::new(api::spatial::SpatialAccess::new(metrics.clone())),
         solves: Arc::new(Semaphore::new(
             std::thread::available_parallelism().map_or(2, |n| n.get()),
         )),

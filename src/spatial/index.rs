@@ -6,12 +6,20 @@
 //! path of the hierarchy; a body whose geometry changed gets a new shape; a new body
 //! waits in a short list of loose entries; a removed body's entry is emptied. The
 //! hierarchy is built anew when those add up (many loose or dead entries, or refits
-//! that have doubled its surface area).
+//! that have doubled its surface area): [`Spatial::worn`].
+//!
+//! That rebuild can be done in place ([`Spatial::sync`]) or elsewhere while the worn
+//! index goes on answering: [`Spatial::update`] brings the index up without rebuilding,
+//! [`Spatial::fork`] copies its bodies out, [`Fork::build`] makes the fresh index from
+//! them (on any thread, holding no lock), and `update` brings that one up to the worn
+//! index's revision before it takes its place. A worn index answers as exactly as a fresh
+//! one; only more slowly.
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use glam::DVec3;
+use imbl::OrdMap;
 use rayon::prelude::*;
 
 use super::aabb::Aabb;
@@ -105,6 +113,34 @@ pub struct SyncStats {
     pub rebuilt: bool,
 }
 
+/// What a fresh index is built from, taken from a live one at no cost
+/// ([`Spatial::fork`]) and built away from it ([`Fork::build`]): the index's world and its
+/// bodies' shapes, shared, so that no shape is built again.
+pub struct Fork {
+    world: Arc<World>,
+    shapes: OrdMap<BodyId, Arc<BodyShape>>,
+    generation: u64,
+}
+
+impl Fork {
+    /// The revision the fork describes (that of the index it was taken from).
+    pub fn revision(&self) -> u64 {
+        self.world.revision()
+    }
+
+    /// The [generation](Spatial::generation) of the index it was taken from.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// The fresh index of the fork's world, one generation past the index it was taken
+    /// from. A body's shape is the index's when it was built from the very same body
+    /// (always, for a fork of an index at its own world), else built here.
+    pub fn build(self) -> Spatial {
+        Spatial::build_reusing(self.world, &self.shapes, self.generation + 1)
+    }
+}
+
 /// The spatial index of one world revision.
 pub struct Spatial {
     world: Arc<World>,
@@ -113,7 +149,7 @@ pub struct Spatial {
     quick: Vec<Quick>,
     by_id: HashMap<BodyId, u32>,
     /// The hierarchy over the entries' bounds. Its order is the identity: leaf position
-    /// `k` holds entry `k` (`rebuild` lays the entries out so).
+    /// `k` holds entry `k` (`build_hierarchy` lays the entries out so).
     bvh: Bvh,
     /// Parent of each hierarchy node.
     parents: Vec<u32>,
@@ -126,26 +162,47 @@ pub struct Spatial {
     /// Surface area gained by refits since the last build, and the area then.
     growth: f64,
     built_area: f64,
+    /// Hierarchies built: 0 for the first, one more for each rebuild.
+    generation: u64,
+    /// Each live body's shape (as in its entry), shared with the forks taken.
+    shapes: OrdMap<BodyId, Arc<BodyShape>>,
 }
 
 impl Spatial {
     /// The index of `world`, shapes built in parallel.
     pub fn build(world: Arc<World>) -> Spatial {
+        Spatial::build_reusing(world, &OrdMap::new(), 0)
+    }
+
+    /// The index of `world`, hierarchy generation `generation`, with each body's shape
+    /// taken from `shapes` when it was built from the very same body, else built (in
+    /// parallel).
+    fn build_reusing(
+        world: Arc<World>,
+        shapes: &OrdMap<BodyId, Arc<BodyShape>>,
+        generation: u64,
+    ) -> Spatial {
         // Each body's node is read once, here: its pose and name come from it, not from
         // looking the body up again.
         let bodies: Vec<(BodyId, &BodyNode)> = world
             .bodies()
             .filter(|(_, n)| n.body.vertex_count() > 0)
             .collect();
-        let shapes: Vec<Arc<BodyShape>> = bodies
+        let built: Vec<(Arc<BodyShape>, bool)> = bodies
             .par_iter()
-            .map(|(_, n)| Arc::new(BodyShape::build(n.body.clone())))
+            .map(|(id, n)| match shapes.get(id) {
+                Some(s) if Arc::ptr_eq(s.body(), &n.body) => (s.clone(), true),
+                _ => (Arc::new(BodyShape::build(n.body.clone())), false),
+            })
             .collect();
+        // The map is taken whole when it holds exactly the shapes used (a fork's always
+        // does), else made anew.
+        let whole = shapes.len() == built.len() && built.iter().all(|(_, reused)| *reused);
         let mut s = Spatial {
             world: world.clone(),
             entries: Vec::with_capacity(bodies.len()),
             quick: Vec::new(),
-            by_id: HashMap::with_capacity(bodies.len()),
+            by_id: HashMap::new(),
             bvh: Bvh::default(),
             parents: Vec::new(),
             loose: Vec::new(),
@@ -153,13 +210,17 @@ impl Spatial {
             dead: 0,
             growth: 0.0,
             built_area: 0.0,
+            generation,
+            shapes: if whole { shapes.clone() } else { OrdMap::new() },
         };
-        for ((id, n), shape) in bodies.into_iter().zip(shapes) {
+        for ((id, n), (shape, _)) in bodies.into_iter().zip(built) {
+            if !whole {
+                s.shapes.insert(id, shape.clone());
+            }
             let pose = world.world_pose_of(id, n);
-            s.by_id.insert(id, s.entries.len() as u32);
             s.entries.push(entry(id, n.name.as_deref(), shape, pose));
         }
-        s.rebuild();
+        s.build_hierarchy();
         s
     }
 
@@ -184,7 +245,7 @@ impl Spatial {
     }
 
     /// Heap bytes held by the index, shapes included (the bodies themselves are the
-    /// world's).
+    /// world's; of the map of shapes, its entries are counted, not its nodes' overhead).
     pub fn heap_bytes(&self) -> usize {
         let shapes: usize = self
             .entries
@@ -199,16 +260,69 @@ impl Spatial {
             + self.bvh.heap_bytes()
             + self.hulls.heap_bytes()
             + self.parents.capacity() * 4
+            + self.shapes.len() * std::mem::size_of::<(BodyId, Arc<BodyShape>)>()
     }
 
-    /// Brings the index to `world`. `touched` lists the bodies changed since the
-    /// index's revision (the parts of one whose world pose changed, or which has no
-    /// entry, are followed); `None` compares every body.
+    /// How many times the hierarchy was built: 0 for an index made by [`Spatial::build`],
+    /// one more for each rebuild in place, and one more than its origin's for an index made
+    /// by [`Fork::build`]. An index and a fork of it with the same generation describe the
+    /// same hierarchy's bodies.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Loose entries: bodies added since the hierarchy was built, which every query
+    /// tests one by one.
+    pub fn loose(&self) -> usize {
+        self.loose.len()
+    }
+
+    /// Whether the hierarchy has worn enough to be built anew: many loose or removed
+    /// entries, refits that have doubled its surface area, or many released records.
+    pub fn worn(&self) -> bool {
+        self.loose.len() > LOOSE_MAX
+            || self.dead > LOOSE_MAX.max(self.entries.len() / 4)
+            || self.growth > self.built_area.max(f64::MIN_POSITIVE)
+            || self.hulls.garbage() > HULL_GARBAGE_MIN.max(self.hulls.size() / 2)
+    }
+
+    /// What a fresh index of the index's world is built from, away from this one
+    /// ([`Fork::build`]): the world and the shapes, shared (constant time, no copy).
+    pub fn fork(&self) -> Fork {
+        Fork {
+            world: self.world.clone(),
+            shapes: self.shapes.clone(),
+            generation: self.generation,
+        }
+    }
+
+    /// Builds the hierarchy anew in place, over the live entries, and moves to the next
+    /// generation. The answers are unchanged; a worn index answers faster after it.
+    pub fn rebuild(&mut self) {
+        self.build_hierarchy();
+        self.generation += 1;
+    }
+
+    /// Brings the index to `world`, and builds the hierarchy anew in place when it has
+    /// [`worn`](Spatial::worn). `touched` is as for [`Spatial::update`].
+    pub fn sync(&mut self, world: Arc<World>, touched: Option<&[BodyId]>) -> SyncStats {
+        let mut stats = self.update(world, touched);
+        if self.worn() {
+            self.rebuild();
+            stats.rebuilt = true;
+        }
+        stats
+    }
+
+    /// Brings the index to `world` without rebuilding the hierarchy (the answers are
+    /// exact either way; a [`worn`](Spatial::worn) one is slower). `touched` lists the
+    /// bodies changed since the index's revision (the parts of one whose world pose
+    /// changed, or which has no entry, are followed); `None` compares every body.
     ///
     /// Precondition: with `touched`, every body added, removed, moved, re-parented,
     /// renamed or edited since the index's revision is listed (or is a part of one
     /// listed).
-    pub fn sync(&mut self, world: Arc<World>, touched: Option<&[BodyId]>) -> SyncStats {
+    pub fn update(&mut self, world: Arc<World>, touched: Option<&[BodyId]>) -> SyncStats {
         let mut stats = SyncStats::default();
         match touched {
             Some(ids) => {
@@ -236,14 +350,6 @@ impl Spatial {
             }
         }
         self.world = world;
-        if self.loose.len() > LOOSE_MAX
-            || self.dead > LOOSE_MAX.max(self.entries.len() / 4)
-            || self.growth > self.built_area.max(f64::MIN_POSITIVE)
-            || self.hulls.garbage() > HULL_GARBAGE_MIN.max(self.hulls.size() / 2)
-        {
-            self.rebuild();
-            stats.rebuilt = true;
-        }
         stats
     }
 
@@ -270,6 +376,7 @@ impl Spatial {
             (None, None) => parts,
             (None, Some(i)) => {
                 self.by_id.remove(&id);
+                self.shapes.remove(&id);
                 let e = &mut self.entries[i as usize];
                 e.bounds = Aabb::EMPTY;
                 if let Some(h) = e.hull.take() {
@@ -284,6 +391,7 @@ impl Spatial {
             (Some(n), None) => {
                 let pose = world.world_pose_of(id, n);
                 let shape = Arc::new(BodyShape::build(n.body.clone()));
+                self.shapes.insert(id, shape.clone());
                 let i = self.entries.len() as u32;
                 let mut e = entry(id, n.name.as_deref(), shape, pose);
                 e.hull = self.hulls.add(&e.shape, &e.pose);
@@ -304,7 +412,9 @@ impl Spatial {
                 }
                 let reshaped = !kept;
                 if reshaped {
-                    e.set_shape(Arc::new(BodyShape::build(n.body.clone())));
+                    let shape = Arc::new(BodyShape::build(n.body.clone()));
+                    self.shapes.insert(id, shape.clone());
+                    e.set_shape(shape);
                     stats.shaped += 1;
                 }
                 let moved = e.pose != pose;
@@ -347,7 +457,7 @@ impl Spatial {
             return;
         }
         // The leaf's boxes are copied out: `refit` mutates the nodes. Leaf position k
-        // holds entry k (see `rebuild`).
+        // holds entry k (see `build_hierarchy`).
         let n = self.bvh.nodes()[leaf as usize];
         let first = n.first as usize;
         let mut boxes = [Aabb::EMPTY; LEAF_BOXES];
@@ -363,7 +473,7 @@ impl Spatial {
     /// Builds the hierarchy anew over the live entries (dropping removed ones), and lays
     /// the entries out in its leaf order, so that bodies near each other in space are
     /// near each other in memory.
-    fn rebuild(&mut self) {
+    fn build_hierarchy(&mut self) {
         self.entries.retain(|e| !e.bounds.is_empty());
         let boxes: Vec<Aabb> = self.entries.iter().map(|e| e.bounds).collect();
         self.bvh = Bvh::build(&boxes);
@@ -407,7 +517,7 @@ impl Spatial {
         // The candidates are gathered first and their records touched in one tight loop
         // of independent reads, so that the cache misses of a query overlap instead of
         // following one another through the tests. Leaf position k holds entry k (see
-        // `rebuild`).
+        // `build_hierarchy`).
         let mut candidates: Vec<u32> = Vec::with_capacity(64);
         self.bvh.within(q.center, r2, |k| candidates.push(k as u32));
         candidates.extend_from_slice(&self.loose);

@@ -23,7 +23,7 @@ pub mod query;
 mod reach;
 pub mod shape;
 
-pub use index::{Spatial, SyncStats};
+pub use index::{Fork, Spatial, SyncStats};
 pub use query::{
     BodyHit, BoxAnswer, BoxQuery, DEFAULT_MAX_FEATURES, DEFAULT_TOLERANCE, Detail, EdgeHit,
     FaceHit, Found, Nearest, QueryError, RayHit, SphereAnswer, SphereQuery, VertexHit,

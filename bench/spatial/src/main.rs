@@ -712,7 +712,9 @@ fn random_cycle(n: usize, seed: u64) -> Vec<u32> {
 }
 
 /// `profile-build <terrain|city> [rounds]`: winged's index built again and again over
-/// one world, for `perf record`; each build's time.
+/// one world, for `perf record`; each build's time, and the two steps of a rebuild away
+/// from the index: its fork (the copy taken while the index is locked) and the fresh
+/// hierarchy built from the fork.
 fn profile_build(args: &[String]) {
     let set = args.first().map_or("terrain", String::as_str);
     let rounds: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(5);
@@ -725,7 +727,17 @@ fn profile_build(args: &[String]) {
         let start = Instant::now();
         let spatial = Spatial::build(world.clone());
         let ms = start.elapsed().as_secs_f64() * 1e3;
-        println!("{set}: {} bodies indexed in {ms:.0} ms", spatial.len());
+        let start = Instant::now();
+        let fork = spatial.fork();
+        let fork_ms = start.elapsed().as_secs_f64() * 1e3;
+        let start = Instant::now();
+        let fresh = fork.build();
+        let rebuild_ms = start.elapsed().as_secs_f64() * 1e3;
+        println!(
+            "{set}: {} bodies indexed in {ms:.0} ms; forked in {fork_ms:.2} ms, \
+             rebuilt from the fork in {rebuild_ms:.1} ms",
+            fresh.len()
+        );
     }
 }
 
