@@ -12,8 +12,8 @@ use winged::model::camera::BaumgartRaster;
 use winged::model::solids::mkcube;
 use winged::model::{
     Body, BodyId, Camera, CameraError, Color, EdgeId, Entity, EulerError, FaceId, Frame,
-    Intrinsics, Light, LightError, Pose, PoseError, Serial, Serials, Transform, VertexId, World,
-    WorldError, check_solid, check_topology,
+    Intrinsics, Light, LightError, Pose, PoseError, Serial, Serials, Size, Transform, VertexId,
+    World, WorldError, check_solid, check_topology,
 };
 
 use common::dump;
@@ -798,6 +798,66 @@ fn a_snapshot_of_many_bodies_shares_every_node_a_write_does_not_reach() {
     assert!(w.node(ids[8]).is_none());
     assert_sound(&w);
     assert_sound(&snap);
+}
+
+/// The faces, edges and vertices of `w`'s bodies, counted one by one.
+fn counted(w: &World) -> Size {
+    w.bodies().fold(Size::default(), |s, (_, n)| {
+        s.plus(Size {
+            faces: n.body.face_count(),
+            edges: n.body.edge_count(),
+            vertices: n.body.vertex_count(),
+        })
+    })
+}
+
+#[test]
+fn the_world_size_follows_every_write_and_is_read_back_from_a_snapshot_file() {
+    let mut w = World::new();
+    let root = w.root();
+    assert_eq!(w.size(), Size::default());
+    let a = cube_at(&mut w, "a", root, DVec3::ZERO);
+    cube_at(&mut w, "b", a, DVec3::new(3.0, 0.0, 0.0));
+    let two_cubes = Size {
+        faces: 12,
+        edges: 24,
+        vertices: 16,
+    };
+    assert_eq!(w.size(), two_cubes);
+    let snap = w.clone();
+    // Euler operators: MKBFV makes a face and a vertex, MKEV an edge and a vertex.
+    let (c, f, v) = w.mkbfv(DVec3::ZERO).unwrap();
+    w.edit(c, |body, s| body.mkev(s, f, v, DVec3::X)).unwrap();
+    let grown = two_cubes.plus(Size {
+        faces: 1,
+        edges: 1,
+        vertices: 2,
+    });
+    assert_eq!(w.size(), grown);
+    // A refused operator changes nothing.
+    assert!(w.edit(c, |body, s| body.mkev(s, f, v, DVec3::NAN)).is_err());
+    assert_eq!(w.size(), grown);
+    // A move and a transform of the geometry change no count.
+    w.set_pose(a, Pose::from_translation(DVec3::Y)).unwrap();
+    let dilate = Transform::Dilate {
+        factor: 2.0,
+        center: DVec3::ZERO,
+    };
+    w.transform(a, Entity::Body, &dilate, Frame::Body).unwrap();
+    assert_eq!(w.size(), grown);
+    assert_sound(&w);
+    // Killing a body takes its parts with it.
+    w.kill(a).unwrap();
+    assert_eq!(w.size(), grown.minus(two_cubes));
+    assert_eq!(w.size(), counted(&w));
+    assert_sound(&w);
+    // The snapshot kept its own.
+    assert_eq!(snap.size(), two_cubes);
+    // Read back from the stored form, the size is worked out again.
+    let bytes = postcard::to_allocvec(&snap).unwrap();
+    let back: World = postcard::from_bytes(&bytes).unwrap();
+    assert_eq!(back.size(), two_cubes);
+    assert_sound(&back);
 }
 
 #[test]

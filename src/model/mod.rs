@@ -28,7 +28,7 @@ pub use check::{Report, Violation, check_solid, check_topology};
 pub use euler::EulerError;
 pub use geometry::{Bounds, Plane};
 pub use ids::{EdgeId, FaceId, Serial, Serials, Side, VertexId};
-pub use parts::{BodyId, BodyNode, Color, Entity, PartsTree};
+pub use parts::{BodyId, BodyNode, Color, Entity, PartsTree, Size};
 pub use pose::{Pose, PoseError};
 pub use topology::{Around, EdgeUse, Link};
 pub use transform::{Frame, Moves, Transform, TransformError};

@@ -12,9 +12,11 @@
 //! * the root is its own supart; every other node's supart is a live node, and the node
 //!   appears exactly once in that supart's `parts`;
 //! * following suparts from any node reaches the root (no cycles);
-//! * a name belongs to at most one node, and the name index agrees with the nodes.
+//! * a name belongs to at most one node, and the name index agrees with the nodes;
+//! * the tree's [`Size`] is the sum of its bodies' counts.
 
 use std::fmt;
+use std::ops::{Deref, DerefMut};
 use std::sync::Arc;
 
 use imbl::OrdMap;
@@ -129,17 +131,117 @@ pub fn validate_name(name: &str) -> Result<(), &'static str> {
     Ok(())
 }
 
+/// Faces, edges and vertices: of one body, or of all the bodies of a tree together.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Size {
+    /// Live faces.
+    pub faces: usize,
+    /// Live edges.
+    pub edges: usize,
+    /// Live vertices.
+    pub vertices: usize,
+}
+
+impl Size {
+    /// The counts of `body`.
+    pub fn of(body: &Body) -> Size {
+        Size {
+            faces: body.face_count(),
+            edges: body.edge_count(),
+            vertices: body.vertex_count(),
+        }
+    }
+
+    /// These counts with `other`'s added.
+    pub fn plus(self, other: Size) -> Size {
+        Size {
+            faces: self.faces + other.faces,
+            edges: self.edges + other.edges,
+            vertices: self.vertices + other.vertices,
+        }
+    }
+
+    /// These counts with `other`'s taken away. Precondition: `other` is part of `self`
+    /// (each count at most `self`'s); the inverse of [`Size::plus`].
+    pub fn minus(self, other: Size) -> Size {
+        Size {
+            faces: self.faces - other.faces,
+            edges: self.edges - other.edges,
+            vertices: self.vertices - other.vertices,
+        }
+    }
+}
+
 /// The bodies of a world and the links between them.
 ///
 /// Both maps are persistent B-trees: cloning the tree (a snapshot of the world) copies
 /// two pointers, and a change after a clone copies only the path to the node it changes
 /// (a few nodes of 16 entries), so that a world of many bodies costs nothing to snapshot
-/// and little to write.
+/// and little to write. The total [`Size`] of the bodies is kept as they are added,
+/// changed and removed, so that it is read in constant time.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(from = "StoredTree")]
 pub struct PartsTree {
     nodes: OrdMap<BodyId, BodyNode>,
     names: OrdMap<String, BodyId>,
     root: BodyId,
+    /// The sum of the nodes' bodies' sizes (not stored: worked out when a tree is read).
+    #[serde(skip)]
+    size: Size,
+}
+
+/// A [`PartsTree`] as it is stored: its nodes, names and root.
+#[derive(Deserialize)]
+struct StoredTree {
+    nodes: OrdMap<BodyId, BodyNode>,
+    names: OrdMap<String, BodyId>,
+    root: BodyId,
+}
+
+impl From<StoredTree> for PartsTree {
+    fn from(t: StoredTree) -> PartsTree {
+        let size = t
+            .nodes
+            .values()
+            .fold(Size::default(), |s, n| s.plus(Size::of(&n.body)));
+        PartsTree {
+            nodes: t.nodes,
+            names: t.names,
+            root: t.root,
+            size,
+        }
+    }
+}
+
+/// A node of a tree borrowed to be changed ([`PartsTree::get_mut`]). When it is dropped,
+/// the tree's [`Size`] takes in what was done to the node's body.
+pub(crate) struct NodeMut<'a> {
+    node: &'a mut BodyNode,
+    size: &'a mut Size,
+    /// The body's size when the node was borrowed.
+    before: Size,
+}
+
+impl Deref for NodeMut<'_> {
+    type Target = BodyNode;
+    fn deref(&self) -> &BodyNode {
+        self.node
+    }
+}
+
+impl DerefMut for NodeMut<'_> {
+    fn deref_mut(&mut self) -> &mut BodyNode {
+        self.node
+    }
+}
+
+impl Drop for NodeMut<'_> {
+    fn drop(&mut self) {
+        let after = Size::of(&self.node.body);
+        if after != self.before {
+            *self.size = self.size.minus(self.before).plus(after);
+        }
+    }
 }
 
 impl PartsTree {
@@ -163,7 +265,17 @@ impl PartsTree {
         );
         let mut names = OrdMap::new();
         names.insert(Self::ROOT_NAME.to_owned(), root);
-        Self { nodes, names, root }
+        Self {
+            nodes,
+            names,
+            root,
+            size: Size::default(),
+        }
+    }
+
+    /// Faces, edges and vertices of all the bodies together. Constant time.
+    pub fn size(&self) -> Size {
+        self.size
     }
 
     /// The world body at the top of the tree.
@@ -318,6 +430,16 @@ impl PartsTree {
                 out.push(format!("body {id}: pose is not finite and unit"));
             }
         }
+        let size = self
+            .nodes
+            .values()
+            .fold(Size::default(), |s, n| s.plus(Size::of(&n.body)));
+        if size != self.size {
+            out.push(format!(
+                "the tree's size {:?} is not its bodies' total {size:?}",
+                self.size
+            ));
+        }
         for (name, id) in &self.names {
             if self.nodes.get(id).and_then(|n| n.name.as_deref()) != Some(name.as_str()) {
                 out.push(format!(
@@ -330,9 +452,16 @@ impl PartsTree {
 
     // ---- changes, made by the world after it has checked them ----
 
-    /// The node of `b`, mutably. Callers change only `pose` and `body` through this.
-    pub(crate) fn get_mut(&mut self, b: BodyId) -> Option<&mut BodyNode> {
-        self.nodes.get_mut(&b)
+    /// The node of `b`, to be changed. Callers change only `pose`, `color` and `body`
+    /// through this; the tree's size follows the body when the borrow ends.
+    pub(crate) fn get_mut(&mut self, b: BodyId) -> Option<NodeMut<'_>> {
+        let node = self.nodes.get_mut(&b)?;
+        let before = Size::of(&node.body);
+        Some(NodeMut {
+            node,
+            size: &mut self.size,
+            before,
+        })
     }
 
     /// Adds a node under `supart`. Preconditions: `id` is new, `supart` lives, `name`
@@ -355,6 +484,7 @@ impl PartsTree {
             .expect("supart is live")
             .parts
             .push(id);
+        self.size = self.size.plus(Size::of(&body));
         self.nodes.insert(
             id,
             BodyNode {
@@ -410,6 +540,7 @@ impl PartsTree {
         ids.into_iter()
             .map(|id| {
                 let node = self.nodes.remove(&id).expect("subtree node is live");
+                self.size = self.size.minus(Size::of(&node.body));
                 if let Some(n) = &node.name {
                     self.names.remove(n);
                 }

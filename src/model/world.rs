@@ -40,7 +40,7 @@ use super::camera::{Camera, CameraError, Light, LightError};
 use super::check::{Report, check_topology};
 use super::euler::EulerError;
 use super::ids::{EdgeId, FaceId, Serial, Serials, VertexId};
-use super::parts::{BodyId, BodyNode, Color, Entity, PartsTree, validate_name};
+use super::parts::{BodyId, BodyNode, Color, Entity, PartsTree, Size, validate_name};
 use super::pose::{Pose, PoseError};
 use super::solids::BuildError;
 use super::transform::{Frame, Transform, TransformError};
@@ -293,6 +293,12 @@ impl World {
     /// Number of bodies, not counting the root.
     pub fn body_count(&self) -> usize {
         self.tree.node_count() - 1
+    }
+
+    /// Faces, edges and vertices of all the bodies together. Constant time: kept as
+    /// bodies are added, changed and removed.
+    pub fn size(&self) -> Size {
+        self.tree.size()
     }
 
     /// BGET by serial number: the live body, face, edge or vertex with serial `s`, and
@@ -680,7 +686,7 @@ impl World {
         WorldError: From<E>,
     {
         self.live_part(b, "edited")?;
-        let node = self.tree.get_mut(b).expect("checked");
+        let mut node = self.tree.get_mut(b).expect("checked");
         let body = Arc::make_mut(&mut node.body);
         let r = op(body, &mut self.serials)?;
         debug_assert!(
@@ -688,6 +694,7 @@ impl World {
             "edit left an invalid body: {}",
             check_topology(body)
         );
+        drop(node);
         self.written();
         Ok(r)
     }
@@ -772,7 +779,7 @@ impl World {
         } else {
             let w = self.tree.world_pose(b).expect("b is live");
             let moves = t.plan(&node.body, what, frame, &w)?;
-            let node = self.tree.get_mut(b).expect("checked");
+            let mut node = self.tree.get_mut(b).expect("checked");
             moves.apply(Arc::make_mut(&mut node.body));
         }
         self.written();
@@ -862,8 +869,9 @@ impl World {
         let node = self.live_part(b, "unglued")?;
         let (supart, pose) = (node.supart, node.pose);
         let mut serials = self.serials.clone();
-        let node = self.tree.get_mut(b).expect("checked");
+        let mut node = self.tree.get_mut(b).expect("checked");
         let un = cow_try(&mut node.body, |body| body.unglue(&mut serials, seam))?;
+        drop(node);
         let split_off = un.split_off.map(|body| {
             let id = BodyId(serials.take());
             self.tree.add(id, None, supart, pose, Arc::new(body));
@@ -888,8 +896,9 @@ impl World {
     ) -> Result<R, WorldError> {
         self.live_part(b, "glued")?;
         let mut serials = self.serials.clone();
-        let node = self.tree.get_mut(b).expect("checked");
+        let mut node = self.tree.get_mut(b).expect("checked");
         let r = cow_try(&mut node.body, |body| op(body, &mut serials))?;
+        drop(node);
         self.serials = serials;
         self.written();
         Ok(r)
@@ -916,8 +925,9 @@ impl World {
             other.set_position(v, p);
         }
         let mut serials = self.serials.clone();
-        let node = self.tree.get_mut(a).expect("checked");
+        let mut node = self.tree.get_mut(a).expect("checked");
         let r = cow_try(&mut node.body, |body| op(body, &mut other, &mut serials))?;
+        drop(node);
         self.serials = serials;
         // The parts tree: a takes b's place if it was within b, then adopts b's parts.
         if self.tree.is_within(a, b) {
