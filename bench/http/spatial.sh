@@ -7,7 +7,10 @@
 #
 #   bash bench/http/spatial.sh                       # 100 × 100 = 10,000 boxes, 10 s per run
 #   CITY_SIDE=50 SECONDS_PER_RUN=5 bash bench/http/spatial.sh   # 2,500 boxes, shorter
+#   WINGED_BIN=/path/to/winged bash bench/http/spatial.sh       # another build, as is
 #
+# After the sphere runs, one more wrk run reads `GET /v1/world` (the world's counts) in
+# the same city.
 # Needs wrk (Debian: apt-get install -y wrk) and curl ≥ 7.66 (for --parallel).
 # Everything runs on this machine: wrk, curl and the server share its cores.
 set -euo pipefail
@@ -25,7 +28,11 @@ if ! command -v wrk >/dev/null 2>&1; then
     exit 1
 fi
 
-cargo build --release --bin winged
+bin="${WINGED_BIN:-}"
+if [ -z "$bin" ]; then
+    cargo build --release --bin winged
+    bin=target/release/winged
+fi
 
 logdir=$(mktemp -d)
 pid=""
@@ -41,7 +48,7 @@ trap cleanup EXIT
 log="$logdir/server.log"
 # winged's own lines (the index build among them, and each sync of the index), not one
 # line per request.
-RUST_LOG="warn,winged=info,winged::server::api::spatial=debug" target/release/winged serve --memory --addr 127.0.0.1:0 >"$log" 2>&1 &
+RUST_LOG="warn,winged=info,winged::server::api::spatial=debug" "$bin" serve --memory --addr 127.0.0.1:0 >"$log" 2>&1 &
 pid=$!
 bound=""
 for _ in $(seq 1 100); do
@@ -140,13 +147,23 @@ kill "$mover" 2>/dev/null || true
 wait "$mover" 2>/dev/null || true
 after=$(curl -sS "$url/v1/world" | sed -E 's/.*"revision":([0-9]+).*/\1/')
 echo "== $((after - before)) moves during the last run (${MOVES_PER_SECOND}/s asked)"
+in_place=$(( $(grep -ac 'spatial index rebuilt in place' "$log" || true) + $(grep -ac 'rebuilt=true' "$log" || true) ))
 echo "== the index was rebuilt $(grep -ac 'spatial index rebuilt off the lock' "$log" || true) times" \
     "off the lock (the last: $(grep -a 'spatial index rebuilt off the lock' "$log" | tail -1 | sed 's/.*INFO //'))" \
-    "and $(grep -ac 'spatial index rebuilt in place' "$log" || true) times in place"
+    "and $in_place times in place (by a sync, queries waiting)"
 echo "== the index was synced $(grep -ac 'spatial index synced' "$log" || true) times; the slowest and the last:"
 grep -a 'spatial index synced' "$log" | awk -F'elapsed_ms=' '{print $2 + 0, $0}' | sort -g | tail -1 |
     cut -d' ' -f2- | sed 's/.*DEBUG //' || true
 grep -a 'spatial index synced' "$log" | tail -1 | sed 's/.*DEBUG //' || true
+
+# The world's counts (bodies, faces, edges, vertices) in the same city.
+out=$(wrk -t"$THREADS" -c"$CONNS" -d"${SECS}s" --latency "$url/v1/world")
+echo "-- GET /v1/world: wrk -t$THREADS -c$CONNS -d${SECS}s --latency $url/v1/world"
+echo "$out"
+summary+=("$(printf '%-34s %10s req/s  p50 %8s  p75 %8s  p90 %8s  p99 %8s' "GET /v1/world" \
+    "$(echo "$out" | awk '/^Requests\/sec/ {print $2}')" "$(echo "$out" | awk '$1 == "50%" {print $2}')" \
+    "$(echo "$out" | awk '$1 == "75%" {print $2}')" "$(echo "$out" | awk '$1 == "90%" {print $2}')" \
+    "$(echo "$out" | awk '$1 == "99%" {print $2}')")")
 
 echo "== summary ($n boxes, wrk -t$THREADS -c$CONNS, ${SECS} s per run; load average now: $(cut -d' ' -f1-3 /proc/loadavg))"
 printf '%s\n' "${summary[@]}"

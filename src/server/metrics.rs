@@ -59,7 +59,8 @@ type HistogramFamily = Family<RequestLabels, Histogram, fn() -> Histogram>;
 /// How the spatial index came to be built.
 #[derive(Clone, Copy, Debug, Hash, PartialEq, Eq)]
 pub enum IndexBuild {
-    /// The first build, by the first query.
+    /// A whole build, shapes and all: by the first query, or by the next query after a
+    /// panic dropped the index.
     First,
     /// A rebuild of a worn index under its lock (queries wait for it).
     InPlace,
