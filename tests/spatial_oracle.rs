@@ -209,6 +209,16 @@ fn check_sphere(index: &Spatial, w: &World, c: DVec3, r: f64) -> usize {
         .sphere(&SphereQuery::new(c, r).with_detail(Detail::Features))
         .expect("valid query");
     let truth = ball_truth(w, c, r);
+    // Nearest first, ties by id.
+    for pair in answer.bodies.windows(2) {
+        let key = |b: &winged::spatial::BodyHit| (b.distance.expect("a distance"), b.id);
+        assert!(
+            key(&pair[0]).partial_cmp(&key(&pair[1])) == Some(std::cmp::Ordering::Less),
+            "{:?} before {:?} at {c} r {r}",
+            key(&pair[0]),
+            key(&pair[1])
+        );
+    }
     let got: Vec<u64> = {
         let mut v: Vec<u64> = answer.bodies.iter().map(|b| b.id).collect();
         v.sort_unstable();

@@ -577,8 +577,7 @@ impl Spatial {
         }
         let tolerance = hits.tolerance;
         let mut bodies = hits.finish()?;
-        // By distance, then id: the keys are sorted, and each hit moved once.
-        bodies.sort_by_cached_key(|b| (ordered_bits(b.distance.unwrap_or(0.0)), b.id));
+        sort_by_distance(&mut bodies);
         Ok(SphereAnswer {
             revision: self.revision(),
             center: q.center,
@@ -812,6 +811,47 @@ fn body_hit(id: BodyId, name: Option<&str>, distance: Option<f64>, inside: bool)
     }
 }
 
+/// Sorts hits by distance (a missing one taken as 0), then by id.
+///
+/// Each hit's key is one `u64`: the distance's [`ordered_bits`] with their lowest bits
+/// replaced by the hit's index, which sorts without branches. Hits whose distances agree
+/// above those bits (equal, or within a few parts in 10¹¹) are then put in exact order by
+/// their whole distance and id, and each hit is moved once.
+fn sort_by_distance(bodies: &mut Vec<BodyHit>) {
+    let n = bodies.len();
+    let full = |b: &BodyHit| (ordered_bits(b.distance.unwrap_or(0.0)), b.id);
+    let index_bits = usize::BITS - n.saturating_sub(1).leading_zeros();
+    if n < 2 || index_bits > 24 {
+        bodies.sort_by_cached_key(full);
+        return;
+    }
+    let low = (1u64 << index_bits) - 1;
+    let mut keys: Vec<u64> = bodies
+        .iter()
+        .enumerate()
+        .map(|(k, b)| full(b).0 & !low | k as u64)
+        .collect();
+    keys.sort_unstable();
+    let mut start = 0;
+    while start < n {
+        let high = keys[start] & !low;
+        let end = start
+            + keys[start..]
+                .iter()
+                .take_while(|&&k| k & !low == high)
+                .count();
+        if end - start > 1 {
+            keys[start..end].sort_unstable_by_key(|&k| full(&bodies[(k & low) as usize]));
+        }
+        start = end;
+    }
+    let mut slots: Vec<Option<BodyHit>> = std::mem::take(bodies).into_iter().map(Some).collect();
+    *bodies = keys
+        .iter()
+        .filter_map(|&k| slots[(k & low) as usize].take())
+        .collect();
+}
+
 /// A key that orders floats as [`f64::total_cmp`] does: the sign bit flipped for
 /// positive numbers, every bit for negative ones.
 fn ordered_bits(x: f64) -> u64 {
@@ -878,6 +918,41 @@ mod tests {
         let a = at(&mut w, 0.0);
         let b = at(&mut w, 5.0);
         (w, a, b)
+    }
+
+    #[test]
+    fn hits_sort_by_distance_then_id_through_ties_and_near_ties() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for n in [0, 1, 2, 3, 17, 120, 300, 5000] {
+            let hits: Vec<BodyHit> = (0..n)
+                .map(|_| {
+                    let r = next();
+                    // Few distinct distances (many ties), neighbours a few ulps apart
+                    // (equal in the packed key's high bits), and some missing.
+                    let base: f64 = [0.0, 0.5, 1.25, 3.0][(r % 4) as usize];
+                    let distance = f64::from_bits(base.to_bits() + (r >> 8) % 3);
+                    let id = BodyId(crate::model::Serial(next() % 1000));
+                    let mut h = body_hit(id, None, Some(distance), false);
+                    if r % 11 == 0 {
+                        h.distance = None;
+                    }
+                    h
+                })
+                .collect();
+            let key = |b: &BodyHit| (ordered_bits(b.distance.unwrap_or(0.0)), b.id);
+            let mut expected: Vec<(u64, u64)> = hits.iter().map(key).collect();
+            expected.sort_unstable();
+            let mut sorted = hits;
+            sort_by_distance(&mut sorted);
+            let got: Vec<(u64, u64)> = sorted.iter().map(key).collect();
+            assert_eq!(got, expected, "{n} hits");
+        }
     }
 
     #[test]
