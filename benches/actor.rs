@@ -317,6 +317,40 @@ fn big_world_bench(c: &mut Criterion) {
     g.finish();
 }
 
+/// A body added under the root and deleted again, each followed by a read, in a world
+/// of many bodies under the root. The root's list of parts is one vector: while a
+/// snapshot shares the root's node, adding or deleting a part copies the whole list, so
+/// this pair grows with the world (unlike `write_then_snapshot`).
+fn add_delete_bench(c: &mut Criterion) {
+    let rt = runtime();
+    let mut g = c.benchmark_group("add_delete_then_snapshot");
+    g.throughput(Throughput::Elements(4));
+    for bodies in [10usize, 10_000, 100_000] {
+        let h = rt.block_on(async { actor::spawn_in_memory(World::new()) });
+        rt.block_on(async {
+            for _ in 0..bodies {
+                create_box(&h).await;
+            }
+        });
+        g.bench_function(format!("{bodies}_bodies"), |b| {
+            b.iter_custom(|iters| {
+                let h = h.clone();
+                on_runtime(&rt, async move {
+                    let start = Instant::now();
+                    for _ in 0..iters {
+                        let body = create_box(&h).await;
+                        black_box(h.snapshot().await.unwrap());
+                        black_box(h.apply(Edit::DeleteBody { body }).await.unwrap());
+                        black_box(h.snapshot().await.unwrap());
+                    }
+                    start.elapsed()
+                })
+            })
+        });
+    }
+    g.finish();
+}
+
 fn config() -> Criterion {
     // Short runs: the figures are taken on a shared 2-core machine.
     Criterion::default()
@@ -328,6 +362,6 @@ fn config() -> Criterion {
 criterion_group! {
     name = benches;
     config = config();
-    targets = translate_bench, snapshot_bench, euler_bench, big_world_bench
+    targets = translate_bench, snapshot_bench, euler_bench, big_world_bench, add_delete_bench
 }
 criterion_main!(benches);
