@@ -515,6 +515,13 @@ fn a_worn_index_is_rebuilt_off_the_lock_while_answers_follow_every_write() {
     // Writes while the rebuild may run are answered at once, and the fresh index
     // catches up with them before it takes the worn one's place.
     let mut moved = Vec::new();
+    let left = |moved: &[u64]| -> Vec<u64> {
+        expected
+            .iter()
+            .copied()
+            .filter(|i| !moved.contains(i))
+            .collect()
+    };
     for (k, &id) in row.iter().enumerate().step_by(10) {
         s.patch(
             &format!("/v1/bodies/{id}"),
@@ -524,12 +531,7 @@ fn a_worn_index_is_rebuilt_off_the_lock_while_answers_follow_every_write() {
         moved.push(id);
         let here = s.get(all).ok();
         assert_eq!(here["revision"], revision(&s));
-        let left: Vec<u64> = expected
-            .iter()
-            .copied()
-            .filter(|i| !moved.contains(i))
-            .collect();
-        assert_eq!(ids(&here["bodies"]), left);
+        assert_eq!(ids(&here["bodies"]), left(&moved));
     }
     let started = std::time::Instant::now();
     while index_builds(&s, "background") == 0 {
@@ -548,12 +550,7 @@ fn a_worn_index_is_rebuilt_off_the_lock_while_answers_follow_every_write() {
     let rev = revision(&s);
     let after = s.get(all).ok();
     assert_eq!(after["revision"], rev);
-    let left: Vec<u64> = expected
-        .iter()
-        .copied()
-        .filter(|i| !moved.contains(i))
-        .collect();
-    assert_eq!(ids(&after["bodies"]), left);
+    assert_eq!(ids(&after["bodies"]), left(&moved));
     let up = s
         .get("/v1/spatial/box?min_x=-2&min_y=48&min_z=-2&max_x=400&max_y=52&max_z=2&detail=bodies")
         .ok();

@@ -265,8 +265,8 @@ impl Spatial {
 
     /// How many times the hierarchy was built: 0 for an index made by [`Spatial::build`],
     /// one more for each rebuild in place, and one more than its origin's for an index made
-    /// by [`Fork::build`]. An index and a fork of it with the same generation describe the
-    /// same hierarchy's bodies.
+    /// by [`Fork::build`]. A fork remembers its origin's generation, so that whoever
+    /// builds it can tell whether the origin was rebuilt in the meantime.
     pub fn generation(&self) -> u64 {
         self.generation
     }
