@@ -15,6 +15,7 @@
 //! * a name belongs to at most one node, and the name index agrees with the nodes;
 //! * the tree's [`Size`] is the sum of its bodies' counts.
 
+use std::collections::HashMap;
 use std::fmt;
 use std::ops::{Deref, DerefMut};
 use std::sync::Arc;
@@ -401,14 +402,23 @@ impl PartsTree {
         if root.pose != Pose::IDENTITY {
             out.push("the root's pose is not the identity".to_owned());
         }
+        // How many times each body is listed as a part, counted in one pass (not by
+        // scanning the supart's list for each body: the root may list every body).
+        let mut listed: HashMap<BodyId, usize> = HashMap::with_capacity(self.nodes.len());
+        for n in self.nodes.values() {
+            for &p in &n.parts {
+                *listed.entry(p).or_default() += 1;
+            }
+        }
         for (&id, n) in &self.nodes {
             if id != self.root {
                 match self.nodes.get(&n.supart) {
                     None => out.push(format!("body {id}: supart {} is not live", n.supart)),
-                    Some(s) => {
-                        let k = s.parts.iter().filter(|&&p| p == id).count();
+                    Some(_) => {
+                        // Listed once in all, and (checked below) only by its supart.
+                        let k = listed.get(&id).copied().unwrap_or(0);
                         if k != 1 {
-                            out.push(format!("body {id} appears {k} times in its supart's parts"));
+                            out.push(format!("body {id} is listed as a part {k} times, not once"));
                         }
                     }
                 }
@@ -547,5 +557,83 @@ impl PartsTree {
                 (id, node)
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Serials;
+    use crate::model::solids::mkcube;
+
+    /// The root (serial 1), `a` (2) under it and `b` (3) under `a`, each of `a` and `b`
+    /// a cube.
+    fn root_a_b() -> (PartsTree, BodyId, BodyId) {
+        let mut serials = Serials::new();
+        let root = BodyId(serials.take());
+        let (a, b) = (BodyId(serials.take()), BodyId(serials.take()));
+        let mut t = PartsTree::new(root);
+        let mut cube = || Arc::new(mkcube(&mut serials, 1.0, 1.0, 1.0).expect("a cube"));
+        t.add(a, Some("a".into()), root, Pose::IDENTITY, cube());
+        t.add(b, None, a, Pose::IDENTITY, cube());
+        (t, a, b)
+    }
+
+    fn problems_of(t: &PartsTree, part: &str) -> usize {
+        t.check().iter().filter(|p| p.contains(part)).count()
+    }
+
+    #[test]
+    fn a_sound_tree_passes_and_each_broken_link_or_total_is_named() {
+        let (t, a, b) = root_a_b();
+        assert_eq!(t.check(), Vec::<String>::new());
+        assert_eq!(
+            t.size(),
+            Size {
+                faces: 12,
+                edges: 24,
+                vertices: 16
+            }
+        );
+
+        // b listed by the root too: twice in all, once by a body that is not its supart.
+        let mut twice = t.clone();
+        twice
+            .nodes
+            .get_mut(&twice.root)
+            .expect("root")
+            .parts
+            .push(b);
+        assert_eq!(problems_of(&twice, "is listed as a part 2 times"), 1);
+        assert_eq!(problems_of(&twice, "whose supart differs"), 1);
+
+        // b dropped from a's list: listed nowhere.
+        let mut orphan = t.clone();
+        orphan.nodes.get_mut(&a).expect("a").parts.clear();
+        assert_eq!(problems_of(&orphan, "is listed as a part 0 times"), 1);
+
+        // A running total that does not match the bodies.
+        let mut miscounted = t.clone();
+        miscounted.size.faces += 1;
+        assert_eq!(problems_of(&miscounted, "is not its bodies' total"), 1);
+    }
+
+    #[test]
+    fn a_tree_of_many_parts_under_one_body_checks_sound() {
+        let mut serials = Serials::new();
+        let root = BodyId(serials.take());
+        let mut t = PartsTree::new(root);
+        let empty = Arc::new(Body::empty());
+        for _ in 0..20_000 {
+            t.add(
+                BodyId(serials.take()),
+                None,
+                root,
+                Pose::IDENTITY,
+                empty.clone(),
+            );
+        }
+        assert_eq!(t.check(), Vec::<String>::new());
+        assert_eq!(t.parts(root).map(<[BodyId]>::len), Some(20_000));
     }
 }
