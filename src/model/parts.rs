@@ -153,6 +153,13 @@ impl Size {
         }
     }
 
+    /// The counts of all the bodies of `nodes` together.
+    pub fn total<'a>(nodes: impl IntoIterator<Item = &'a BodyNode>) -> Size {
+        nodes
+            .into_iter()
+            .fold(Size::default(), |s, n| s.plus(Size::of(&n.body)))
+    }
+
     /// These counts with `other`'s added.
     pub fn plus(self, other: Size) -> Size {
         Size {
@@ -201,10 +208,7 @@ struct StoredTree {
 
 impl From<StoredTree> for PartsTree {
     fn from(t: StoredTree) -> PartsTree {
-        let size = t
-            .nodes
-            .values()
-            .fold(Size::default(), |s, n| s.plus(Size::of(&n.body)));
+        let size = Size::total(t.nodes.values());
         PartsTree {
             nodes: t.nodes,
             names: t.names,
@@ -440,10 +444,7 @@ impl PartsTree {
                 out.push(format!("body {id}: pose is not finite and unit"));
             }
         }
-        let size = self
-            .nodes
-            .values()
-            .fold(Size::default(), |s, n| s.plus(Size::of(&n.body)));
+        let size = Size::total(self.nodes.values());
         if size != self.size {
             out.push(format!(
                 "the tree's size {:?} is not its bodies' total {size:?}",

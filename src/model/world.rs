@@ -141,13 +141,8 @@ impl Killed {
     }
     /// Total faces, edges and vertices removed.
     pub fn counts(&self) -> (usize, usize, usize) {
-        self.bodies.iter().fold((0, 0, 0), |(f, e, v), (_, n)| {
-            (
-                f + n.body.face_count(),
-                e + n.body.edge_count(),
-                v + n.body.vertex_count(),
-            )
-        })
+        let s = Size::total(self.bodies.iter().map(|(_, n)| n));
+        (s.faces, s.edges, s.vertices)
     }
 }
 
