@@ -4,9 +4,11 @@
 //! the order of the world hierarchy's leaves, so that the bodies a query meets are read
 //! from a few neighbouring cache lines instead of from each body's own allocations.
 //!
-//! A [cuboid](BodyShape::cuboid) (a box, turned or not) gets a shorter record, its centre, axes and half extents, and its distance is the
-//! box distance in its own frame: one cache line pair instead of planes, loci and
-//! edges.
+//! A [cuboid](BodyShape::cuboid) (a box, turned or not) gets a shorter record, its
+//! centre, axes and half extents, and its distance is the box distance in its own frame:
+//! one aligned pair of cache lines instead of planes, loci and edges. Cuboid records
+//! live in an array of their own, with the body-frame centre and axes a move reads kept
+//! in a parallel array, so that a query's cuboids lie densely, two lines each.
 //!
 //! A record is rewritten in place when its body moves; a body that changes shape gets a
 //! new record at the end and its old one becomes garbage, reclaimed when the index lays
@@ -21,9 +23,9 @@ use crate::model::Pose;
 /// Where one body's record lies in [`Hulls`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HullRef {
-    /// First number of the record: the surface tolerance, then either (a cuboid) the
-    /// centre, the three axes and the three half extents (then the centre and axes in the
-    /// body's frame), or 4 numbers per plane (normal, offset) and 3 per vertex.
+    /// A cuboid's place in [`Hulls::boxes`]; for another solid, the first number of its
+    /// record in [`Hulls::data`]: the surface tolerance, then 4 numbers per plane
+    /// (normal, offset) and 3 per vertex.
     at: u32,
     /// First edge in [`Hulls::edges`] (none for a cuboid).
     edges_at: u32,
@@ -54,18 +56,42 @@ impl HullRef {
     }
 }
 
-/// Numbers a query reads of a cuboid's record: the tolerance, the centre, three axes,
-/// three half extents, in world coordinates.
+/// Numbers a query reads of a cuboid's record ([`Cuboid`]).
 const CUBOID_QUERIED: usize = 1 + 3 + 9 + 3;
-/// Numbers in a cuboid's record: those a query reads, then the centre and the three axes
-/// in the body's frame, from which a move rewrites the record without reading the shape.
+/// Numbers held for a cuboid: its record, then its [`Frame`].
 const CUBOID_LEN: usize = CUBOID_QUERIED + 3 + 9;
+
+/// What a query reads of a cuboid, in world coordinates: the surface tolerance, the
+/// centre, the three axes and the three half extents. Aligned so that it fills exactly
+/// two cache lines.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+struct Cuboid {
+    eps: f64,
+    centre: [f64; 3],
+    axes: [[f64; 3]; 3],
+    half: [f64; 3],
+}
+
+const _: () = assert!(std::mem::size_of::<Cuboid>() == 8 * CUBOID_QUERIED);
+
+/// A cuboid's centre and axes in its body's frame, from which a move rewrites its
+/// [`Cuboid`] without reading the shape.
+#[derive(Clone, Copy, Debug, Default)]
+struct Frame {
+    centre: DVec3,
+    axes: [DVec3; 3],
+}
 
 /// The records of the convex bodies of an index.
 #[derive(Default)]
 pub struct Hulls {
+    /// The records of convex solids other than cuboids, one after another.
     data: Vec<f64>,
     edges: Vec<[u16; 2]>,
+    /// The cuboids' records, and (same index) their frames.
+    boxes: Vec<Cuboid>,
+    frames: Vec<Frame>,
     /// Numbers and edges held by records no longer in use.
     garbage: usize,
 }
@@ -86,25 +112,27 @@ impl Hulls {
             return None;
         }
         let (at, edges_at) = (self.data.len(), self.edges.len());
-        if shape.cuboid.is_some() {
+        if let Some(b) = &shape.cuboid {
+            if self.boxes.len() >= u32::MAX as usize {
+                return None;
+            }
             let h = HullRef {
-                at: at as u32,
-                edges_at: edges_at as u32,
+                at: self.boxes.len() as u32,
+                edges_at: 0,
                 faces: 0,
                 points: 0,
                 edges: 0,
                 cuboid: true,
             };
-            self.data.resize(at + CUBOID_LEN, 0.0);
-            if let Some(b) = &shape.cuboid {
-                let rec = &mut self.data[at..at + CUBOID_LEN];
-                rec[0] = shape.surface_eps();
-                rec[13..16].copy_from_slice(&b.half);
-                rec[16..19].copy_from_slice(&b.centre.to_array());
-                for (out, a) in rec[19..28].chunks_exact_mut(3).zip(b.axes) {
-                    out.copy_from_slice(&a.to_array());
-                }
-            }
+            self.boxes.push(Cuboid {
+                eps: shape.surface_eps(),
+                half: b.half,
+                ..Cuboid::default()
+            });
+            self.frames.push(Frame {
+                centre: b.centre,
+                axes: b.axes,
+            });
             self.pose(h, shape, pose);
             return Some(h);
         }
@@ -132,18 +160,18 @@ impl Hulls {
     /// Rewrites record `h` (of `shape`) for the body posed at `pose`. Precondition: `h`
     /// was made by [`Hulls::add`] for `shape`.
     pub fn pose(&mut self, h: HullRef, shape: &BodyShape, pose: &Pose) {
-        let rec = &mut self.data[h.at as usize..h.at as usize + h.len()];
         if h.cuboid {
-            // From the body-frame centre and axes kept at the record's end: the shape
-            // is not read.
-            let (world, local) = rec.split_at_mut(CUBOID_QUERIED);
-            let v = |i: usize| DVec3::new(local[i], local[i + 1], local[i + 2]);
-            world[1..4].copy_from_slice(&pose.transform_point(v(0)).to_array());
-            for (k, out) in world[4..13].chunks_exact_mut(3).enumerate() {
-                out.copy_from_slice(&pose.transform_vector(v(3 + 3 * k)).to_array());
+            // From the body-frame centre and axes kept beside the record: the shape is
+            // not read.
+            let frame = &self.frames[h.at as usize];
+            let rec = &mut self.boxes[h.at as usize];
+            rec.centre = pose.transform_point(frame.centre).to_array();
+            for (out, a) in rec.axes.iter_mut().zip(frame.axes) {
+                *out = pose.transform_vector(a).to_array();
             }
             return;
         }
+        let rec = &mut self.data[h.at as usize..h.at as usize + h.len()];
         rec[0] = shape.surface_eps();
         let (planes, points) = rec[1..].split_at_mut(4 * h.faces as usize);
         for (out, f) in planes.chunks_exact_mut(4).zip(&shape.faces) {
@@ -156,14 +184,17 @@ impl Hulls {
         }
     }
 
-    /// Reads the first and the last number a query reads of record `h`, which brings
-    /// that part of a cuboid's record (128 bytes, over two or three cache lines) wholly
-    /// into the cache, and its ends for a longer one. The answer means nothing; a caller
-    /// reads many records so, one after another, for their cache misses to overlap before
-    /// it tests them.
+    /// Reads the first and the last number a query reads of record `h`, which brings a
+    /// cuboid's record (its two cache lines) wholly into the cache, and the ends of a
+    /// longer one. The answer means nothing; a caller reads many records so, one after
+    /// another, for their cache misses to overlap before it tests them.
     #[inline]
     pub fn touch(&self, h: HullRef) -> f64 {
         let at = h.at as usize;
+        if h.cuboid {
+            let b = &self.boxes[at];
+            return b.eps + b.half[2];
+        }
         self.data[at] + self.data[at + h.queried() - 1]
     }
 
@@ -171,6 +202,8 @@ impl Hulls {
     pub fn shrink_to_fit(&mut self) {
         self.data.shrink_to_fit();
         self.edges.shrink_to_fit();
+        self.boxes.shrink_to_fit();
+        self.frames.shrink_to_fit();
     }
 
     /// Drops record `h` (it becomes garbage).
@@ -186,12 +219,15 @@ impl Hulls {
 
     /// Numbers and edges held in all.
     pub fn size(&self) -> usize {
-        self.data.len() + self.edges.len()
+        self.data.len() + self.edges.len() + self.boxes.len() * CUBOID_LEN
     }
 
     /// Heap bytes held.
     pub fn heap_bytes(&self) -> usize {
-        self.data.capacity() * 8 + self.edges.capacity() * 4
+        self.data.capacity() * 8
+            + self.edges.capacity() * 4
+            + self.boxes.capacity() * std::mem::size_of::<Cuboid>()
+            + self.frames.capacity() * std::mem::size_of::<Frame>()
     }
 
     /// The ball of centre `c` and radius `r` (world frame) against the body of record
@@ -209,22 +245,23 @@ impl Hulls {
     /// centre in the cuboid's frame, the plane distances are `|qₖ| − halfₖ` and the
     /// distance is the length of their positive parts.
     pub fn ball(&self, h: HullRef, c: DVec3, r: f64) -> Option<Option<(f64, bool)>> {
-        let rec = &self.data[h.at as usize..h.at as usize + h.len()];
-        let eps = rec[0];
         if h.cuboid {
-            let v = |i: usize| DVec3::new(rec[i], rec[i + 1], rec[i + 2]);
-            let d = c - v(1);
-            let out = [0, 1, 2].map(|k| d.dot(v(4 + 3 * k)).abs() - rec[13 + k]);
+            let b = &self.boxes[h.at as usize];
+            let d = c - DVec3::from_array(b.centre);
+            let along = |k: usize| d.dot(DVec3::from_array(b.axes[k])).abs() - b.half[k];
+            let out = [along(0), along(1), along(2)];
             // The largest plane distance: each pair of opposite planes gives
             // |(c − centre)·axis| − half.
             let side = out[0].max(out[1]).max(out[2]);
-            return settle(side, eps, r, || {
+            return settle(side, b.eps, r, || {
                 out.iter()
                     .map(|x| x.max(0.0) * x.max(0.0))
                     .sum::<f64>()
                     .sqrt()
             });
         }
+        let rec = &self.data[h.at as usize..h.at as usize + h.len()];
+        let eps = rec[0];
         let (planes, points) = rec[1..].split_at(4 * h.faces as usize);
         let side_of = |p: DVec3, q: &[f64]| q[0] * p.x + q[1] * p.y + q[2] * p.z - q[3];
         let side = planes
