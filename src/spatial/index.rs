@@ -24,10 +24,11 @@ use rayon::prelude::*;
 
 use super::aabb::Aabb;
 use super::bvh::Bvh;
+use super::hits::{Hits, Order};
 use super::hull::{HullRef, Hulls};
 use super::query::{
-    BodyHit, BoxAnswer, BoxQuery, Detail, Found, Nearest, QueryError, RayHit, SphereAnswer,
-    SphereQuery, validate_point, validate_ray,
+    BoxAnswer, BoxQuery, Detail, Found, Nearest, QueryError, RayHit, SphereAnswer, SphereQuery,
+    validate_point, validate_ray,
 };
 use super::reach::{self, Features, cull_radius2};
 use super::shape::BodyShape;
@@ -450,6 +451,11 @@ impl Spatial {
         }
     }
 
+    /// The name of the body in entry `i`, if it has one.
+    fn name_of(&self, i: u32) -> Option<&str> {
+        self.entries[i as usize].name.as_deref()
+    }
+
     /// Refits the hierarchy after entry `i`'s bounds changed.
     fn refit(&mut self, i: u32) {
         let leaf = self.entries[i as usize].leaf;
@@ -458,7 +464,7 @@ impl Spatial {
         }
         // The leaf's boxes are copied out: `refit` mutates the nodes. Leaf position k
         // holds entry k (see `build_hierarchy`).
-        let n = self.bvh.nodes()[leaf as usize];
+        let n = *self.bvh.node(leaf as usize);
         let first = n.first as usize;
         let mut boxes = [Aabb::EMPTY; LEAF_BOXES];
         for (slot, e) in boxes
@@ -518,7 +524,7 @@ impl Spatial {
         // of independent reads, so that the cache misses of a query overlap instead of
         // following one another through the tests. Leaf position k holds entry k (see
         // `build_hierarchy`).
-        let mut candidates: Vec<u32> = Vec::with_capacity(64);
+        let mut candidates: Vec<u32> = Vec::with_capacity(256);
         self.bvh.within(q.center, r2, |k| candidates.push(k as u32));
         candidates.extend_from_slice(&self.loose);
         if q.detail == Detail::Bodies {
@@ -530,7 +536,8 @@ impl Spatial {
             std::hint::black_box(touched);
         }
         // Most candidates are hits: room for them all, made once.
-        let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies, candidates.len());
+        let features = q.detail != Detail::Bodies;
+        let mut hits = Hits::new(features, q.max_features, q.max_bodies, candidates.len());
         let mut test = |i: usize| {
             if hits.full {
                 return;
@@ -545,12 +552,8 @@ impl Spatial {
                 .and_then(|h| self.hulls.ball(h, q.center, q.radius))
             {
                 if let Some((distance, inside)) = decided {
-                    let name = quick
-                        .named
-                        .then(|| self.entries[i].name.as_deref())
-                        .flatten();
-                    let hit = body_hit(quick.id, name, Some(distance), inside);
-                    hits.push(hit, Features::default());
+                    let named = quick.named.then_some(i as u32);
+                    hits.push_body(quick.id, named, Some(distance), inside);
                 }
                 return;
             }
@@ -569,15 +572,15 @@ impl Spatial {
                 q.tolerance,
                 &mut f,
             ) {
-                hits.push(body_hit(e.id, e.name.as_deref(), Some(distance), inside), f);
+                let named = e.name.is_some().then_some(i as u32);
+                hits.push(e.id, named, Some(distance), inside, f);
             }
         };
         for &i in &candidates {
             test(i as usize);
         }
         let tolerance = hits.tolerance;
-        let mut bodies = hits.finish()?;
-        sort_by_distance(&mut bodies);
+        let bodies = hits.finish(Order::Distance, |i| self.name_of(i))?;
         Ok(SphereAnswer {
             revision: self.revision(),
             center: q.center,
@@ -592,8 +595,9 @@ impl Spatial {
     pub fn aabb(&self, q: &BoxQuery) -> Result<BoxAnswer, QueryError> {
         q.validate()?;
         let region = Aabb::new(q.min, q.max);
-        let mut hits = Hits::new(q.detail, q.max_features, q.max_bodies, 0);
-        let mut visit = |e: &Entry| {
+        let mut hits = Hits::new(q.detail != Detail::Bodies, q.max_features, q.max_bodies, 0);
+        let mut visit = |i: usize| {
+            let e = &self.entries[i];
             if hits.full || !e.bounds.overlaps(&region) {
                 return;
             }
@@ -608,18 +612,16 @@ impl Spatial {
                 q.detail,
                 &mut f,
             ) {
-                hits.push(body_hit(e.id, e.name.as_deref(), None, inside), f);
+                let named = e.name.is_some().then_some(i as u32);
+                hits.push(e.id, named, None, inside, f);
             }
         };
-        let order = self.bvh.order();
-        self.bvh
-            .overlapping(q.min, q.max, |k| visit(&self.entries[order[k] as usize]));
+        // Leaf position k holds entry k (see `build_hierarchy`).
+        self.bvh.overlapping(q.min, q.max, &mut visit);
         for &i in &self.loose {
-            visit(&self.entries[i as usize]);
+            visit(i as usize);
         }
-        let mut bodies = hits.finish()?;
-        // The ids are sorted, and each hit moved once.
-        bodies.sort_by_cached_key(|b| b.id);
+        let bodies = hits.finish(Order::Id, |i| self.name_of(i))?;
         Ok(BoxAnswer {
             revision: self.revision(),
             min: q.min,
@@ -740,129 +742,6 @@ impl Spatial {
     }
 }
 
-/// The bodies a region query found, within its budget of features.
-struct Hits {
-    detail: Detail,
-    bodies: Vec<BodyHit>,
-    features: usize,
-    limit: usize,
-    max_bodies: usize,
-    /// Whether the budget ran out (the query is refused).
-    full: bool,
-    /// The largest chord deviation of the portions drawn.
-    tolerance: f64,
-}
-
-impl Hits {
-    /// No hits yet, with room for `room` bodies (at most `max_bodies`).
-    fn new(detail: Detail, limit: usize, max_bodies: usize, room: usize) -> Hits {
-        Hits {
-            detail,
-            bodies: Vec::with_capacity(room.min(max_bodies)),
-            features: 0,
-            limit,
-            max_bodies,
-            full: false,
-            tolerance: 0.0,
-        }
-    }
-
-    /// Adds a body with its features (sorted by id; dropped at `bodies` detail).
-    fn push(&mut self, mut hit: BodyHit, mut f: Features) {
-        self.features += f.count();
-        if self.features > self.limit || self.bodies.len() >= self.max_bodies {
-            self.full = true;
-            return;
-        }
-        self.tolerance = self.tolerance.max(f.tolerance);
-        if self.detail != Detail::Bodies {
-            f.sort();
-            hit.faces = Some(f.faces);
-            hit.edges = Some(f.edges);
-            hit.vertices = Some(f.vertices);
-        }
-        self.bodies.push(hit);
-    }
-
-    /// The bodies, or the refusal when there were too many features.
-    fn finish(self) -> Result<Vec<BodyHit>, QueryError> {
-        if self.full && self.features > self.limit {
-            return Err(QueryError::TooManyFeatures { limit: self.limit });
-        }
-        if self.full {
-            return Err(QueryError::TooManyBodies {
-                limit: self.max_bodies,
-            });
-        }
-        Ok(self.bodies)
-    }
-}
-
-/// A body's entry in an answer, its features still to come.
-fn body_hit(id: BodyId, name: Option<&str>, distance: Option<f64>, inside: bool) -> BodyHit {
-    BodyHit {
-        id: id.get(),
-        name: name.map(str::to_owned),
-        distance,
-        inside,
-        faces: None,
-        edges: None,
-        vertices: None,
-    }
-}
-
-/// Sorts hits by distance (a missing one taken as 0), then by id.
-///
-/// Each hit's key is one `u64`: the distance's [`ordered_bits`] with their lowest bits
-/// replaced by the hit's index, which sorts without branches. Hits whose distances agree
-/// above those bits (equal, or within a few parts in 10¹¹) are then put in exact order by
-/// their whole distance and id, and each hit is moved once.
-fn sort_by_distance(bodies: &mut Vec<BodyHit>) {
-    let n = bodies.len();
-    let full = |b: &BodyHit| (ordered_bits(b.distance.unwrap_or(0.0)), b.id);
-    let index_bits = usize::BITS - n.saturating_sub(1).leading_zeros();
-    if n < 2 || index_bits > 24 {
-        bodies.sort_by_cached_key(full);
-        return;
-    }
-    let low = (1u64 << index_bits) - 1;
-    let mut keys: Vec<u64> = bodies
-        .iter()
-        .enumerate()
-        .map(|(k, b)| full(b).0 & !low | k as u64)
-        .collect();
-    keys.sort_unstable();
-    let mut start = 0;
-    while start < n {
-        let high = keys[start] & !low;
-        let end = start
-            + keys[start..]
-                .iter()
-                .take_while(|&&k| k & !low == high)
-                .count();
-        if end - start > 1 {
-            keys[start..end].sort_unstable_by_key(|&k| full(&bodies[(k & low) as usize]));
-        }
-        start = end;
-    }
-    let mut slots: Vec<Option<BodyHit>> = std::mem::take(bodies).into_iter().map(Some).collect();
-    *bodies = keys
-        .iter()
-        .filter_map(|&k| slots[(k & low) as usize].take())
-        .collect();
-}
-
-/// A key that orders floats as [`f64::total_cmp`] does: the sign bit flipped for
-/// positive numbers, every bit for negative ones.
-fn ordered_bits(x: f64) -> u64 {
-    let bits = x.to_bits();
-    if bits >> 63 == 0 {
-        bits | 1 << 63
-    } else {
-        !bits
-    }
-}
-
 fn entry(id: BodyId, name: Option<&str>, shape: Arc<BodyShape>, pose: Pose) -> Entry {
     let mut e = Entry {
         id,
@@ -918,65 +797,6 @@ mod tests {
         let a = at(&mut w, 0.0);
         let b = at(&mut w, 5.0);
         (w, a, b)
-    }
-
-    #[test]
-    fn hits_sort_by_distance_then_id_through_ties_and_near_ties() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
-        for n in [0, 1, 2, 3, 17, 120, 300, 5000] {
-            let hits: Vec<BodyHit> = (0..n)
-                .map(|_| {
-                    let r = next();
-                    // Few distinct distances (many ties), neighbours a few ulps apart
-                    // (equal in the packed key's high bits), and some missing.
-                    let base: f64 = [0.0, 0.5, 1.25, 3.0][(r % 4) as usize];
-                    let distance = f64::from_bits(base.to_bits() + (r >> 8) % 3);
-                    let id = BodyId(crate::model::Serial(next() % 1000));
-                    let mut h = body_hit(id, None, Some(distance), false);
-                    if r % 11 == 0 {
-                        h.distance = None;
-                    }
-                    h
-                })
-                .collect();
-            let key = |b: &BodyHit| (ordered_bits(b.distance.unwrap_or(0.0)), b.id);
-            let mut expected: Vec<(u64, u64)> = hits.iter().map(key).collect();
-            expected.sort_unstable();
-            let mut sorted = hits;
-            sort_by_distance(&mut sorted);
-            let got: Vec<(u64, u64)> = sorted.iter().map(key).collect();
-            assert_eq!(got, expected, "{n} hits");
-        }
-    }
-
-    #[test]
-    fn ordered_bits_order_floats_as_total_cmp_does() {
-        let xs = [
-            f64::NEG_INFINITY,
-            -3.5,
-            -1e-300,
-            -0.0,
-            0.0,
-            1e-300,
-            2.0,
-            7.25,
-            f64::INFINITY,
-        ];
-        for a in xs {
-            for b in xs {
-                assert_eq!(
-                    ordered_bits(a).cmp(&ordered_bits(b)),
-                    a.total_cmp(&b),
-                    "{a} {b}"
-                );
-            }
-        }
     }
 
     #[test]

@@ -17,6 +17,7 @@
 pub mod aabb;
 pub mod bvh;
 pub mod exact;
+mod hits;
 mod hull;
 pub mod index;
 pub mod query;

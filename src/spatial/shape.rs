@@ -630,7 +630,7 @@ mod tests {
         }
         // And each face sits at its leaf position: its leaf's box holds it.
         let mut placed = 0;
-        for n in shape.bvh.nodes().iter().filter(|n| n.is_leaf()) {
+        for n in shape.bvh.leaves() {
             let lo = DVec3::from_array(n.min.map(f64::from));
             let hi = DVec3::from_array(n.max.map(f64::from));
             for k in n.first..n.first + n.count {
