@@ -72,6 +72,13 @@ pub fn ball(
         .iter()
         .fold(0, |acc, &k| acc ^ shape.touch(k as usize));
     std::hint::black_box(touched);
+    if features {
+        // Most candidate faces meet the ball, with about as many edges as faces (each
+        // edge reported by one of its two faces) and half as many vertices.
+        out.faces.reserve(candidates.len());
+        out.edges.reserve(candidates.len() * 3 / 2);
+        out.vertices.reserve(candidates.len() / 2 + 1);
+    }
     candidates.iter().for_each(|&k| {
         let k = k as usize;
         // A face whose bounds are farther than the ball (beyond rounding) has no point
@@ -268,3 +275,4 @@ pub fn aabb(
     let inside = shape.contains(centre);
     (met || inside).then_some(inside)
 }
+
