@@ -169,16 +169,18 @@ pub fn in_polygon(
     };
     let mut prev = first;
     for q in it.chain(std::iter::once(first)) {
-        let (ax, ay, bx, by) = (prev[i], prev[j], q[i], q[j]);
-        if (ay > py) != (by > py) {
-            let x = ax + (py - ay) * (bx - ax) / (by - ay);
-            if px < x {
-                inside = !inside;
-            }
-        }
+        inside ^= crosses((px, py), prev, q, (i, j));
         prev = q;
     }
     inside
+}
+
+/// Whether side `a`–`b` of a polygon (projected on axes `(i, j)`) crosses the ray from
+/// `(px, py)` towards +i: one step of [`in_polygon`]'s crossing count.
+#[inline]
+pub fn crosses((px, py): (f64, f64), a: DVec3, b: DVec3, (i, j): (usize, usize)) -> bool {
+    let (ax, ay, bx, by) = (a[i], a[j], b[i], b[j]);
+    (ay > py) != (by > py) && px < ax + (py - ay) * (bx - ax) / (by - ay)
 }
 
 /// How far a point `p` found on a polygon's plane is from the polygon's boundary,

@@ -275,4 +275,3 @@ pub fn aabb(
     let inside = shape.contains(centre);
     (met || inside).then_some(inside)
 }
-

@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use super::aabb::Aabb;
 use super::bvh::Bvh;
-use super::exact::{boundary_margin, drop_axis, in_polygon, segment_closest};
+use super::exact::{boundary_margin, crosses, drop_axis, in_polygon, segment_closest};
 use rayon::prelude::*;
 
 use crate::model::{Body, EdgeUse, FaceId, Side};
@@ -360,17 +360,23 @@ impl BodyShape {
             .map(|c| self.points[c.vertex as usize])
     }
 
-    /// The point of face `k` closest to `p`.
+    /// The point of face `k` closest to `p`: the foot of `p` on the face's plane when
+    /// it lies inside the face's loop (by [`in_polygon`]'s crossing count, taken in the
+    /// same pass over the sides), else the nearest point of a side.
     pub fn closest_on_face(&self, k: usize, p: DVec3) -> Closest {
         let f = &self.faces[k];
         let cs = self.corners_of(k);
         let pd = f.normal.dot(p) - f.offset;
+        let foot = p - f.normal * pd;
+        let axes = (f.axes.0 as usize, f.axes.1 as usize);
+        let projected = (foot[axes.0], foot[axes.1]);
         let mut best = Closest {
             d2: f64::INFINITY,
             point: p,
             interior: false,
             plane_distance: pd,
         };
+        let mut inside = false;
         for (i, c) in cs.iter().enumerate() {
             let a = self.points[c.vertex as usize];
             let b = self.points[cs[(i + 1) % cs.len()].vertex as usize];
@@ -379,15 +385,12 @@ impl BodyShape {
                 best.d2 = d2;
                 best.point = q;
             }
+            inside ^= crosses(projected, a, b, axes);
         }
-        if f.normal != DVec3::ZERO && pd * pd < best.d2 {
-            let foot = p - f.normal * pd;
-            let axes = (f.axes.0 as usize, f.axes.1 as usize);
-            if in_polygon(foot, self.loop_points(k), axes) {
-                best.d2 = pd * pd;
-                best.point = foot;
-                best.interior = true;
-            }
+        if f.normal != DVec3::ZERO && pd * pd < best.d2 && inside {
+            best.d2 = pd * pd;
+            best.point = foot;
+            best.interior = true;
         }
         best
     }
