@@ -242,7 +242,7 @@ pub struct FaceHit {
 }
 
 /// An edge that enters the region: the part of it inside.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct EdgeHit {
     /// The edge's id.
     pub id: u64,
@@ -252,7 +252,7 @@ pub struct EdgeHit {
 }
 
 /// A vertex inside the region.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct VertexHit {
     /// The vertex's id.
     pub id: u64,

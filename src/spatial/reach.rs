@@ -33,10 +33,53 @@ impl Features {
 
     /// Sorts each list by id.
     pub fn sort(&mut self) {
-        self.faces.sort_unstable_by_key(|f| f.id);
-        self.edges.sort_unstable_by_key(|e| e.id);
-        self.vertices.sort_unstable_by_key(|v| v.id);
+        sort_by_id(
+            &mut self.faces,
+            |f| f.id,
+            |f| {
+                // A face's portion is moved out, not copied.
+                let portion = f.portion.take();
+                FaceHit { portion, ..*f }
+            },
+        );
+        sort_by_id(&mut self.edges, |e| e.id, |e| *e);
+        sort_by_id(&mut self.vertices, |v| v.id, |v| *v);
     }
+}
+
+/// Sorts `items` by `id`, distinct for each item; `take` moves an item out of its slot
+/// (each slot is taken once, and the slots are then dropped).
+///
+/// When the ids span less than `2^(64 − b)`, with `b` the bits of an index into
+/// `items` (always, for the features of one body), each item's key is one `u64`: its
+/// id less the least id, shifted, with its index in the low bits. The keys sort
+/// without branches, and the items are gathered in their order. Otherwise the items
+/// are sorted by id directly.
+fn sort_by_id<T>(items: &mut Vec<T>, id: impl Fn(&T) -> u64, take: impl Fn(&mut T) -> T) {
+    let n = items.len();
+    if n < 2 {
+        return;
+    }
+    let (lo, hi) = items
+        .iter()
+        .map(&id)
+        .fold((u64::MAX, 0), |(lo, hi), i| (lo.min(i), hi.max(i)));
+    let index_bits = usize::BITS - (n - 1).leading_zeros();
+    if index_bits >= 32 || (hi - lo) >> (64 - index_bits) != 0 {
+        items.sort_unstable_by_key(id);
+        return;
+    }
+    let low = (1u64 << index_bits) - 1;
+    let mut keys: Vec<u64> = items
+        .iter()
+        .enumerate()
+        .map(|(k, t)| (id(t) - lo) << index_bits | k as u64)
+        .collect();
+    keys.sort_unstable();
+    *items = keys
+        .iter()
+        .map(|&k| take(&mut items[(k & low) as usize]))
+        .collect();
 }
 
 /// How much a squared cull radius is widened so that rounding in box distances never
@@ -274,4 +317,66 @@ pub fn aabb(
     let centre = inverse.transform_point((lo + hi) * 0.5);
     let inside = shape.contains(centre);
     (met || inside).then_some(inside)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn features_sort_by_id_over_narrow_and_wide_id_ranges() {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        // Ids close together (packed keys), and spanning all of u64 (the direct sort).
+        for spread in [1_000u64, u64::MAX] {
+            for n in [0, 1, 2, 5, 120, 1000] {
+                let mut ids: Vec<u64> = (0..n).map(|_| next() % spread).collect();
+                ids.sort_unstable();
+                ids.dedup();
+                let mut shuffled = ids.clone();
+                for i in (1..shuffled.len()).rev() {
+                    shuffled.swap(i, (next() % (i as u64 + 1)) as usize);
+                }
+                // Each face carries a portion naming its id, to see that it moves whole.
+                let mut f = Features {
+                    faces: shuffled
+                        .iter()
+                        .map(|&id| FaceHit {
+                            id,
+                            distance: Some(id as f64),
+                            portion: Some(vec![vec![DVec3::splat(id as f64)]]),
+                        })
+                        .collect(),
+                    vertices: shuffled
+                        .iter()
+                        .map(|&id| VertexHit {
+                            id,
+                            position: DVec3::splat(id as f64),
+                        })
+                        .collect(),
+                    ..Features::default()
+                };
+                f.sort();
+                let faces: Vec<(u64, f64)> = f
+                    .faces
+                    .iter()
+                    .map(|h| {
+                        let p = h.portion.as_ref().expect("a portion");
+                        assert_eq!(h.distance, Some(p[0][0].x));
+                        (h.id, p[0][0].x)
+                    })
+                    .collect();
+                let want: Vec<(u64, f64)> = ids.iter().map(|&i| (i, i as f64)).collect();
+                assert_eq!(faces, want, "{n} faces under {spread}");
+                let vertices: Vec<(u64, f64)> =
+                    f.vertices.iter().map(|v| (v.id, v.position.y)).collect();
+                assert_eq!(vertices, want, "{n} vertices under {spread}");
+            }
+        }
+    }
 }
