@@ -9,7 +9,7 @@ use super::exact::{
     polygon_disc,
 };
 use super::query::{Detail, EdgeHit, FaceHit, VertexHit};
-use super::shape::{BodyShape, Closest, Corner};
+use super::shape::{BodyShape, Closest, Corner, next_corner};
 use crate::model::Pose;
 
 /// The features of one body found by a query, in world coordinates.
@@ -143,7 +143,7 @@ pub fn ball(
             if meets && !(features && reports(corner, a_in)) {
                 continue;
             }
-            let b = shape.points[cs[(i + 1) % cs.len()].vertex as usize];
+            let b = shape.points[next_corner(cs, i).vertex as usize];
             let Some((t0, t1)) = clip_segment_ball(a, b, c, r) else {
                 continue;
             };

@@ -58,6 +58,14 @@ impl Corner {
     }
 }
 
+/// The corner after corner `i` of a face's corners `cs` (the first after the last):
+/// side `i` of the face runs from `cs[i]` to it. Without a division, unlike `(i + 1) %
+/// cs.len()`.
+#[inline]
+pub fn next_corner(cs: &[Corner], i: usize) -> &Corner {
+    cs.get(i + 1).unwrap_or(&cs[0])
+}
+
 /// One face: its plane, where its corners are and its serial number.
 #[derive(Clone, Copy, Debug)]
 pub struct FaceRec {
@@ -379,7 +387,7 @@ impl BodyShape {
         let mut inside = false;
         for (i, c) in cs.iter().enumerate() {
             let a = self.points[c.vertex as usize];
-            let b = self.points[cs[(i + 1) % cs.len()].vertex as usize];
+            let b = self.points[next_corner(cs, i).vertex as usize];
             let (d2, q) = segment_closest(p, a, b);
             if d2 < best.d2 {
                 best.d2 = d2;
