@@ -17,7 +17,7 @@
 use glam::DVec3;
 
 use super::exact::segment_closest;
-use super::shape::BodyShape;
+use super::shape::{BodyShape, next_corner};
 use crate::model::Pose;
 
 /// Where one body's record lies in [`Hulls`].
@@ -140,7 +140,7 @@ impl Hulls {
             let cs = shape.corners_of(k);
             let canonical = cs.iter().enumerate().filter(|(_, c)| c.reports_edge());
             self.edges.extend(
-                canonical.map(|(i, c)| [c.vertex as u16, cs[(i + 1) % cs.len()].vertex as u16]),
+                canonical.map(|(i, c)| [c.vertex as u16, next_corner(cs, i).vertex as u16]),
             );
         }
         // A convex shape has at most `CONVEX_MAX_FACES` faces, so its counts fit.

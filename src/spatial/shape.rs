@@ -59,8 +59,8 @@ impl Corner {
 }
 
 /// The corner after corner `i` of a face's corners `cs` (the first after the last):
-/// side `i` of the face runs from `cs[i]` to it. Without a division, unlike `(i + 1) %
-/// cs.len()`.
+/// side `i` of the face runs from `cs[i]` to it. Found without the division of
+/// `(i + 1) % cs.len()`. Precondition: `i < cs.len()`.
 #[inline]
 pub fn next_corner(cs: &[Corner], i: usize) -> &Corner {
     cs.get(i + 1).unwrap_or(&cs[0])
