@@ -74,22 +74,20 @@ impl Hits {
         f: Features,
     ) {
         self.counted += f.count();
-        if !self.keep_features {
-            self.push_body(id, named, distance, inside);
+        if !self.has_room() {
             return;
         }
-        if self.counted > self.limit || self.found.len() >= self.max_bodies {
-            self.full = true;
-            return;
-        }
-        self.tolerance = self.tolerance.max(f.tolerance);
-        self.features.push(f);
+        let features = self.keep_features.then(|| {
+            self.tolerance = self.tolerance.max(f.tolerance);
+            self.features.push(f);
+            (self.features.len() - 1) as u32
+        });
         self.found.push(Found {
             id,
             distance,
             named,
             inside,
-            features: Some((self.features.len() - 1) as u32),
+            features,
         });
     }
 
@@ -102,17 +100,25 @@ impl Hits {
         distance: Option<f64>,
         inside: bool,
     ) {
+        if self.has_room() {
+            self.found.push(Found {
+                id,
+                distance,
+                named,
+                inside,
+                features: None,
+            });
+        }
+    }
+
+    /// Whether the budget has room for one more body with the features counted so far;
+    /// when not, the hits become [full](Hits::full).
+    #[inline]
+    fn has_room(&mut self) -> bool {
         if self.counted > self.limit || self.found.len() >= self.max_bodies {
             self.full = true;
-            return;
         }
-        self.found.push(Found {
-            id,
-            distance,
-            named,
-            inside,
-            features: None,
-        });
+        !self.full
     }
 
     /// The answer's bodies in `order`, each with its name (`name_of` the entry given
