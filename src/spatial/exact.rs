@@ -18,12 +18,65 @@ use crate::model::geometry::point_in_polygon;
 /// An endpoint inside the ball (|p − c|² ≤ r²) is always in the answer: its parameter
 /// is exactly 0 or 1. A tangent segment answers `t0 == t1`.
 pub fn clip_segment_ball(a: DVec3, b: DVec3, c: DVec3, r: f64) -> Option<(f64, f64)> {
-    let r2 = r * r;
-    let f = a - c;
-    let d = b - a;
-    let ca = f.length_squared() - r2;
-    let cb = (b - c).length_squared() - r2;
-    clip_quadratic(d.length_squared(), 2.0 * f.dot(d), ca, cb)
+    SegmentFrom::new(a, b, c).clip_ball(r * r)
+}
+
+/// A segment `a`–`b` seen from a point `p`: the products that both its closest point
+/// to `p` ([`SegmentFrom::closest`]) and its clip against a ball about `p`
+/// ([`SegmentFrom::clip_ball`]) are made of, computed once. Their answers are those of
+/// [`segment_closest`] and [`clip_segment_ball`], bit for bit.
+#[derive(Clone, Copy, Debug)]
+pub struct SegmentFrom {
+    /// Where the segment starts.
+    pub a: DVec3,
+    /// Where it ends.
+    pub b: DVec3,
+    /// |b − a|².
+    pub l2: f64,
+    /// (a − p)·(b − a).
+    pub fd: f64,
+    /// |a − p|².
+    pub fa: f64,
+    /// |b − p|².
+    pub fb: f64,
+}
+
+impl SegmentFrom {
+    /// Segment `a`–`b` seen from `p`.
+    #[inline]
+    pub fn new(a: DVec3, b: DVec3, p: DVec3) -> SegmentFrom {
+        SegmentFrom::with_ends(a, b, p, (a - p).length_squared(), (b - p).length_squared())
+    }
+
+    /// Segment `a`–`b` seen from `p`, given `fa = |a − p|²` and `fb = |b − p|²` (as
+    /// [`SegmentFrom::new`] computes them: a polygon's sides share them).
+    #[inline]
+    pub fn with_ends(a: DVec3, b: DVec3, p: DVec3, fa: f64, fb: f64) -> SegmentFrom {
+        let d = b - a;
+        SegmentFrom {
+            a,
+            b,
+            l2: d.length_squared(),
+            fd: (a - p).dot(d),
+            fa,
+            fb,
+        }
+    }
+
+    /// Squared distance from `p` (the point the segment is seen from) to the segment,
+    /// and the closest point: [`segment_closest`]'s answer.
+    #[inline]
+    pub fn closest(&self, p: DVec3) -> (f64, DVec3) {
+        // (p − a)·d is −fd exactly: negation commutes with IEEE rounding.
+        closest_at(p, self.a, self.b, self.l2, -self.fd)
+    }
+
+    /// The parameters of the part of the segment inside the closed ball of squared
+    /// radius `r2` about the point it is seen from: [`clip_segment_ball`]'s answer.
+    #[inline]
+    pub fn clip_ball(&self, r2: f64) -> Option<(f64, f64)> {
+        clip_quadratic(self.l2, 2.0 * self.fd, self.fa - r2, self.fb - r2)
+    }
 }
 
 /// The same clip as [`clip_segment_ball`] for a segment and a disc in the plane.
@@ -128,9 +181,14 @@ pub fn clip_segment_box(a: DVec3, b: DVec3, lo: DVec3, hi: DVec3) -> Option<(f64
 #[inline]
 pub fn segment_closest(p: DVec3, a: DVec3, b: DVec3) -> (f64, DVec3) {
     let d = b - a;
-    let l2 = d.length_squared();
+    closest_at(p, a, b, d.length_squared(), (p - a).dot(d))
+}
+
+/// [`segment_closest`] given `l2 = |b − a|²` and `pd = (p − a)·(b − a)`.
+#[inline]
+fn closest_at(p: DVec3, a: DVec3, b: DVec3, l2: f64, pd: f64) -> (f64, DVec3) {
     let t = if l2 > 0.0 {
-        ((p - a).dot(d) / l2).clamp(0.0, 1.0)
+        (pd / l2).clamp(0.0, 1.0)
     } else {
         0.0
     };
@@ -408,6 +466,45 @@ mod tests {
         )
         .unwrap();
         assert_eq!((t0, t1), (0.25, 0.75));
+    }
+
+    /// The shared products answer as the separate tests did: the closest point from
+    /// (p − a)·d and the clip from |a − c|² − r², |b − c|² − r², 2 (a − c)·d.
+    #[test]
+    fn a_segment_seen_from_a_point_answers_bit_for_bit_as_the_separate_tests() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
+        };
+        let mut point = || DVec3::new(next(), next(), next());
+        for _ in 0..10_000 {
+            let (a, b, p) = (point(), point(), point());
+            let r = p.x.abs() + 0.5;
+            let s = SegmentFrom::new(a, b, p);
+            let d = b - a;
+            let l2 = d.length_squared();
+            let t = if l2 > 0.0 {
+                ((p - a).dot(d) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let q = lerp_exact(a, b, t);
+            let want = ((p - q).length_squared(), q);
+            assert_eq!(s.closest(p), want);
+            let f = a - p;
+            let r2 = r * r;
+            let clip = clip_quadratic(
+                l2,
+                2.0 * f.dot(d),
+                f.length_squared() - r2,
+                (b - p).length_squared() - r2,
+            );
+            assert_eq!(s.clip_ball(r2), clip);
+            assert_eq!(clip_segment_ball(a, b, p, r), clip);
+        }
     }
 
     #[test]

@@ -1,15 +1,14 @@
 //! How far one posed body reaches into a ball or a box: its faces, edges and vertices
 //! there, exactly, in world coordinates.
 
-use glam::{DVec2, DVec3};
+use glam::{DAffine3, DVec2, DVec3};
 
 use super::aabb::Aabb;
 use super::exact::{
-    achieved_tolerance, clip_polygon_box, clip_segment_ball, clip_segment_box, lerp_exact,
-    polygon_disc,
+    SegmentFrom, achieved_tolerance, clip_polygon_box, clip_segment_box, lerp_exact, polygon_disc,
 };
 use super::query::{Detail, EdgeHit, FaceHit, VertexHit};
-use super::shape::{BodyShape, Closest, Corner, next_corner};
+use super::shape::{BodyShape, Closest, Corner};
 use crate::model::Pose;
 
 /// The features of one body found by a query, in world coordinates.
@@ -109,7 +108,7 @@ pub fn ball(
     // The candidate faces are gathered first and touched in one tight loop of
     // independent reads (`BodyShape::touch`), so that the cache misses of a query on a
     // large shape overlap instead of following one another through the tests.
-    let mut candidates: Vec<u32> = Vec::with_capacity(64);
+    let mut candidates: Vec<u32> = Vec::with_capacity(256);
     shape.bvh.within(c, cull2, |k| candidates.push(k as u32));
     let touched = candidates
         .iter()
@@ -122,66 +121,34 @@ pub fn ball(
         out.edges.reserve(candidates.len() * 3 / 2);
         out.vertices.reserve(candidates.len() / 2 + 1);
     }
-    candidates.iter().for_each(|&k| {
+    let ball = Ball {
+        shape,
+        // A matrix maps the many points reported faster than the quaternion.
+        world: pose.to_affine(),
+        c,
+        r,
+        r2,
+        cull2,
+        detail,
+        tolerance,
+    };
+    // Each face's sides seen from the centre, made once for its closest point and its
+    // clips: on the stack for a triangle or a quadrilateral (the loops over them then
+    // unroll), in one reused vector otherwise.
+    let mut sides: Vec<SegmentFrom> = Vec::new();
+    for &k in &candidates {
         let k = k as usize;
-        // A face whose bounds are farther than the ball (beyond rounding) has no point
-        // in it; the bounds are cheaper than the closest point.
-        if Aabb::of_points(shape.loop_points(k)).distance_squared(c) > cull2 {
-            return;
-        }
-        let closest = shape.closest_on_face(k, c);
-        if closest.d2 > cull2 {
-            return;
-        }
         let cs = shape.corners_of(k);
-        let mut meets = closest.interior && closest.d2 <= r2;
-        for (i, corner) in cs.iter().enumerate() {
-            let a = shape.points[corner.vertex as usize];
-            let a_in = features && (a - c).length_squared() <= r2;
-            // Once the face is known to meet the ball, a side is clipped only for what
-            // its corner reports.
-            if meets && !(features && reports(corner, a_in)) {
-                continue;
-            }
-            let b = shape.points[next_corner(cs, i).vertex as usize];
-            let Some((t0, t1)) = clip_segment_ball(a, b, c, r) else {
-                continue;
-            };
-            meets = true;
-            if features {
-                report(
-                    shape,
-                    corner,
-                    [a, b],
-                    (t0, t1),
-                    a_in,
-                    |p| pose.transform_point(p),
-                    out,
-                );
-            }
+        if let Ok(cs) = <&[Corner; 3]>::try_from(cs) {
+            ball.face(k, cs, &shape.sides_of(cs, c), &mut nearest, out);
+        } else if let Ok(cs) = <&[Corner; 4]>::try_from(cs) {
+            ball.face(k, cs, &shape.sides_of(cs, c), &mut nearest, out);
+        } else {
+            sides.clear();
+            sides.extend(shape.sides_from(k, c));
+            ball.face(k, cs, &sides, &mut nearest, out);
         }
-        if !meets {
-            return;
-        }
-        if nearest.is_none_or(|n| closest.d2 < n.d2) {
-            nearest = Some(closest);
-        }
-        if features {
-            let portion = (detail == Detail::Portions).then(|| {
-                let (loops, tol) = disc_portion(shape, k, c, r, tolerance);
-                out.tolerance = out.tolerance.max(tol);
-                loops
-                    .into_iter()
-                    .map(|l| l.into_iter().map(|p| pose.transform_point(p)).collect())
-                    .collect()
-            });
-            out.faces.push(FaceHit {
-                id: shape.faces[k].serial,
-                distance: Some(closest.d2.sqrt()),
-                portion,
-            });
-        }
-    });
+    }
     match nearest {
         Some(n) => {
             // The nearest point inside a face: the face plane's side tells; on an edge
@@ -195,6 +162,105 @@ pub fn ball(
         }
         // No face meets the ball: either it is wholly inside the solid or apart from it.
         None => shape.contains(c).then_some((0.0, true)),
+    }
+}
+
+/// A ball query against one posed shape, as [`ball`] runs it face by face.
+struct Ball<'a> {
+    shape: &'a BodyShape,
+    /// The shape's pose, as a matrix.
+    world: DAffine3,
+    /// Centre (body frame).
+    c: DVec3,
+    r: f64,
+    /// `r²`.
+    r2: f64,
+    /// [`cull_radius2`] of `r`.
+    cull2: f64,
+    detail: Detail,
+    tolerance: f64,
+}
+
+impl Ball<'_> {
+    /// Face `k`, of corners `cs` and sides `sides` (seen from the centre, as
+    /// [`BodyShape::sides_from`] makes them), against the ball: when it meets the ball,
+    /// its closest point is kept in `nearest` if nearer than what is there, and at
+    /// `detail` above `bodies` the face, the edges and the vertices it reports are
+    /// appended to `out`.
+    #[inline(always)]
+    fn face(
+        &self,
+        k: usize,
+        cs: &[Corner],
+        sides: &[SegmentFrom],
+        nearest: &mut Option<Closest>,
+        out: &mut Features,
+    ) {
+        let Ball {
+            shape,
+            world,
+            c,
+            r,
+            r2,
+            cull2,
+            detail,
+            tolerance,
+        } = *self;
+        let features = detail != Detail::Bodies;
+        // A face whose bounds are farther than the ball (beyond rounding) has no point
+        // in it; the bounds are cheaper than the closest point.
+        if Aabb::of_points(sides.iter().map(|s| s.a)).distance_squared(c) > cull2 {
+            return;
+        }
+        let closest = shape.closest_of_sides(k, c, sides.iter().copied());
+        if closest.d2 > cull2 {
+            return;
+        }
+        let mut meets = closest.interior && closest.d2 <= r2;
+        for (side, corner) in sides.iter().zip(cs) {
+            let a_in = features && side.fa <= r2;
+            // Once the face is known to meet the ball, a side is clipped only for what
+            // its corner reports.
+            if meets && !(features && reports(corner, a_in)) {
+                continue;
+            }
+            let Some((t0, t1)) = side.clip_ball(r2) else {
+                continue;
+            };
+            meets = true;
+            if features {
+                report(
+                    shape,
+                    corner,
+                    [side.a, side.b],
+                    (t0, t1),
+                    a_in,
+                    |p| world.transform_point3(p),
+                    out,
+                );
+            }
+        }
+        if !meets {
+            return;
+        }
+        if nearest.is_none_or(|n| closest.d2 < n.d2) {
+            *nearest = Some(closest);
+        }
+        if features {
+            let portion = (detail == Detail::Portions).then(|| {
+                let (loops, tol) = disc_portion(shape, k, c, r, tolerance);
+                out.tolerance = out.tolerance.max(tol);
+                loops
+                    .into_iter()
+                    .map(|l| l.into_iter().map(|p| world.transform_point3(p)).collect())
+                    .collect()
+            });
+            out.faces.push(FaceHit {
+                id: shape.faces[k].serial,
+                distance: Some(closest.d2.sqrt()),
+                portion,
+            });
+        }
     }
 }
 

@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use super::aabb::Aabb;
 use super::bvh::Bvh;
-use super::exact::{boundary_margin, crosses, drop_axis, in_polygon, segment_closest};
+use super::exact::{SegmentFrom, boundary_margin, crosses, drop_axis, in_polygon};
 use rayon::prelude::*;
 
 use crate::model::{Body, EdgeUse, FaceId, Side};
@@ -368,12 +368,57 @@ impl BodyShape {
             .map(|c| self.points[c.vertex as usize])
     }
 
+    /// Face `k`'s sides, in order, each seen from `p` (see [`SegmentFrom`]): side `i`
+    /// runs from corner `i` to the next. Each corner's squared distance from `p` is
+    /// computed once, for the side it ends and the side it starts.
+    #[inline]
+    pub fn sides_from(&self, k: usize, p: DVec3) -> impl Iterator<Item = SegmentFrom> + '_ {
+        let cs = self.corners_of(k);
+        let seen = move |c: &Corner| {
+            let q = self.points[c.vertex as usize];
+            (q, (q - p).length_squared())
+        };
+        let first = cs.first().map_or((p, 0.0), seen);
+        let mut a = first;
+        cs.iter().enumerate().map(move |(i, _)| {
+            let b = cs.get(i + 1).map_or(first, seen);
+            let side = SegmentFrom::with_ends(a.0, b.0, p, a.1, b.1);
+            a = b;
+            side
+        })
+    }
+
+    /// [`BodyShape::sides_from`] for a face of `N` corners `cs`, as an array.
+    #[inline(always)]
+    pub fn sides_of<const N: usize>(&self, cs: &[Corner; N], p: DVec3) -> [SegmentFrom; N] {
+        let seen: [(DVec3, f64); N] = std::array::from_fn(|i| {
+            let q = self.points[cs[i].vertex as usize];
+            (q, (q - p).length_squared())
+        });
+        std::array::from_fn(|i| {
+            let (a, b) = (seen[i], seen[if i + 1 == N { 0 } else { i + 1 }]);
+            SegmentFrom::with_ends(a.0, b.0, p, a.1, b.1)
+        })
+    }
+
     /// The point of face `k` closest to `p`: the foot of `p` on the face's plane when
     /// it lies inside the face's loop (by [`in_polygon`]'s crossing count, taken in the
     /// same pass over the sides), else the nearest point of a side.
+    #[inline]
     pub fn closest_on_face(&self, k: usize, p: DVec3) -> Closest {
+        self.closest_of_sides(k, p, self.sides_from(k, p))
+    }
+
+    /// [`BodyShape::closest_on_face`] from the face's `sides` as
+    /// [`BodyShape::sides_from`] gives them (a caller that needs them again keeps them).
+    #[inline(always)]
+    pub fn closest_of_sides(
+        &self,
+        k: usize,
+        p: DVec3,
+        sides: impl Iterator<Item = SegmentFrom>,
+    ) -> Closest {
         let f = &self.faces[k];
-        let cs = self.corners_of(k);
         let pd = f.normal.dot(p) - f.offset;
         let foot = p - f.normal * pd;
         let axes = (f.axes.0 as usize, f.axes.1 as usize);
@@ -385,15 +430,13 @@ impl BodyShape {
             plane_distance: pd,
         };
         let mut inside = false;
-        for (i, c) in cs.iter().enumerate() {
-            let a = self.points[c.vertex as usize];
-            let b = self.points[next_corner(cs, i).vertex as usize];
-            let (d2, q) = segment_closest(p, a, b);
+        for side in sides {
+            let (d2, q) = side.closest(p);
             if d2 < best.d2 {
                 best.d2 = d2;
                 best.point = q;
             }
-            inside ^= crosses(projected, a, b, axes);
+            inside ^= crosses(projected, side.a, side.b, axes);
         }
         if f.normal != DVec3::ZERO && pd * pd < best.d2 && inside {
             best.d2 = pd * pd;
