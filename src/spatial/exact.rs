@@ -25,7 +25,7 @@ pub fn clip_segment_ball(a: DVec3, b: DVec3, c: DVec3, r: f64) -> Option<(f64, f
 /// to `p` ([`SegmentFrom::closest`]) and its clip against a ball about `p`
 /// ([`SegmentFrom::clip_ball`]) are made of, computed once. Their answers are those of
 /// [`segment_closest`] and [`clip_segment_ball`], bit for bit.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SegmentFrom {
     /// Where the segment starts.
     pub a: DVec3,

@@ -388,7 +388,8 @@ impl BodyShape {
         })
     }
 
-    /// [`BodyShape::sides_from`] for a face of `N` corners `cs`, as an array.
+    /// [`BodyShape::sides_from`] for a face whose `N` corners are `cs` (as
+    /// [`BodyShape::corners_of`] gives them), as an array.
     #[inline(always)]
     pub fn sides_of<const N: usize>(&self, cs: &[Corner; N], p: DVec3) -> [SegmentFrom; N] {
         let seen: [(DVec3, f64); N] = std::array::from_fn(|i| {
@@ -662,6 +663,51 @@ mod tests {
     use crate::model::Serial;
     use crate::model::Serials;
     use crate::model::solids::sphere;
+
+    /// A face's sides in an array are those the iterator gives, bit for bit, and so is
+    /// the closest point made from them; over triangles, quadrilaterals and pentagons.
+    #[test]
+    fn sides_in_an_array_are_the_sides_the_iterator_gives() {
+        use crate::model::solids::prism_solid;
+        let mut serials = Serials::new();
+        let ball = sphere(&mut serials, 2.0, 7, 5).expect("a sphere");
+        let pentagon: Vec<glam::DVec2> = (0..5)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::TAU / 5.0;
+                glam::DVec2::new(1.5 * a.cos(), 1.5 * a.sin())
+            })
+            .collect();
+        let prism = prism_solid(&mut serials, &pentagon, 3.0).expect("a prism");
+        let mut lengths = std::collections::BTreeSet::new();
+        for body in [ball, prism] {
+            let shape = BodyShape::build(Arc::new(body));
+            for p in [DVec3::ZERO, DVec3::new(0.3, -1.7, 2.9), DVec3::splat(5.0)] {
+                for k in 0..shape.faces.len() {
+                    let cs = shape.corners_of(k);
+                    lengths.insert(cs.len());
+                    let want: Vec<SegmentFrom> = shape.sides_from(k, p).collect();
+                    assert_eq!(want.len(), cs.len());
+                    let got: Vec<SegmentFrom> = match cs.len() {
+                        3 => shape
+                            .sides_of(<&[Corner; 3]>::try_from(cs).unwrap(), p)
+                            .to_vec(),
+                        4 => shape
+                            .sides_of(<&[Corner; 4]>::try_from(cs).unwrap(), p)
+                            .to_vec(),
+                        5 => shape
+                            .sides_of(<&[Corner; 5]>::try_from(cs).unwrap(), p)
+                            .to_vec(),
+                        n => panic!("a face of {n} corners"),
+                    };
+                    assert_eq!(got, want, "face {k} from {p}");
+                    let c = shape.closest_of_sides(k, p, got.iter().copied());
+                    let d = shape.closest_on_face(k, p);
+                    assert_eq!((c.d2, c.point, c.interior), (d.d2, d.point, d.interior));
+                }
+            }
+        }
+        assert_eq!(lengths.into_iter().collect::<Vec<_>>(), vec![3, 4, 5]);
+    }
 
     /// A body large enough to be laid out in parallel chunks keeps every face's plane and
     /// perimeter, in the body's own order, whichever chunk the face fell in.
