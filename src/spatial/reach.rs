@@ -103,8 +103,39 @@ pub fn ball(
 ) -> Option<(f64, bool)> {
     let r2 = r * r;
     let features = detail != Detail::Bodies;
-    let mut nearest: Option<Closest> = None;
     let cull2 = cull_radius2(r);
+    let ball = Ball {
+        shape,
+        // A matrix maps the many points reported faster than the quaternion.
+        world: pose.to_affine(),
+        c,
+        r,
+        r2,
+        cull2,
+        detail,
+        tolerance,
+    };
+    // Each face's sides seen from the centre, made once for its closest point and its
+    // clips (see `Ball::test`).
+    let mut sides: Vec<SegmentFrom> = Vec::new();
+    if !features && shape.faces.len() > NEAREST_FIRST {
+        // At `bodies` detail the answer is the nearest of the faces that meet the ball.
+        // When the face nearest the centre meets it, that is the answer: the hierarchy's
+        // nearest walk finds it in a few leaves, where testing every face in the ball
+        // would read them all. When no face is that near, none meets the ball.
+        match shape.nearest_face(c, cull2) {
+            None => return conclude(shape, c, None),
+            Some((k, _)) => {
+                let mut nearest = None;
+                ball.test(k, &mut sides, &mut nearest, out);
+                if nearest.is_some() {
+                    return conclude(shape, c, nearest);
+                }
+                // The nearest face is within rounding of the ball but misses it: the
+                // faces are tried one by one below.
+            }
+        }
+    }
     // The candidate faces are gathered first and touched in one tight loop of
     // independent reads (`BodyShape::touch`), so that the cache misses of a query on a
     // large shape overlap instead of following one another through the tests.
@@ -121,34 +152,20 @@ pub fn ball(
         out.edges.reserve(candidates.len() * 3 / 2);
         out.vertices.reserve(candidates.len() / 2 + 1);
     }
-    let ball = Ball {
-        shape,
-        // A matrix maps the many points reported faster than the quaternion.
-        world: pose.to_affine(),
-        c,
-        r,
-        r2,
-        cull2,
-        detail,
-        tolerance,
-    };
-    // Each face's sides seen from the centre, made once for its closest point and its
-    // clips: on the stack for a triangle or a quadrilateral (the loops over them then
-    // unroll), in one reused vector otherwise.
-    let mut sides: Vec<SegmentFrom> = Vec::new();
+    let mut nearest: Option<Closest> = None;
     for &k in &candidates {
-        let k = k as usize;
-        let cs = shape.corners_of(k);
-        if let Ok(cs) = <&[Corner; 3]>::try_from(cs) {
-            ball.face(k, cs, &shape.sides_of(cs, c), &mut nearest, out);
-        } else if let Ok(cs) = <&[Corner; 4]>::try_from(cs) {
-            ball.face(k, cs, &shape.sides_of(cs, c), &mut nearest, out);
-        } else {
-            sides.clear();
-            sides.extend(shape.sides_from(k, c));
-            ball.face(k, cs, &sides, &mut nearest, out);
-        }
+        ball.test(k as usize, &mut sides, &mut nearest, out);
     }
+    conclude(shape, c, nearest)
+}
+
+/// Faces above which a body's answer at `bodies` detail starts from its face nearest the
+/// centre (see [`ball`]); a body of fewer has them all tested, as cheaply.
+const NEAREST_FIRST: usize = 64;
+
+/// The answer of [`ball`] for `shape` and centre `c` (body frame), from the closest
+/// point of the nearest face meeting the ball (`None`: no face meets it).
+fn conclude(shape: &BodyShape, c: DVec3, nearest: Option<Closest>) -> Option<(f64, bool)> {
     match nearest {
         Some(n) => {
             // The nearest point inside a face: the face plane's side tells; on an edge
@@ -182,6 +199,29 @@ struct Ball<'a> {
 }
 
 impl Ball<'_> {
+    /// [`Ball::face`] for face `k`, its sides made on the stack for a triangle or a
+    /// quadrilateral (the loops over them then unroll), in `sides` otherwise.
+    #[inline(always)]
+    fn test(
+        &self,
+        k: usize,
+        sides: &mut Vec<SegmentFrom>,
+        nearest: &mut Option<Closest>,
+        out: &mut Features,
+    ) {
+        let (shape, c) = (self.shape, self.c);
+        let cs = shape.corners_of(k);
+        if let Ok(cs) = <&[Corner; 3]>::try_from(cs) {
+            self.face(k, cs, &shape.sides_of(cs, c), nearest, out);
+        } else if let Ok(cs) = <&[Corner; 4]>::try_from(cs) {
+            self.face(k, cs, &shape.sides_of(cs, c), nearest, out);
+        } else {
+            sides.clear();
+            sides.extend(shape.sides_from(k, c));
+            self.face(k, cs, sides, nearest, out);
+        }
+    }
+
     /// Face `k`, of corners `cs` and sides `sides` (seen from the centre, as
     /// [`BodyShape::sides_from`] makes them), against the ball: when it meets the ball,
     /// its closest point is kept in `nearest` if nearer than what is there, and at
@@ -388,6 +428,59 @@ pub fn aabb(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A large body's answer at `bodies` detail, which starts from its face nearest the
+    /// centre, is the answer of testing every face in the ball (as `features` detail
+    /// does): the same bodies met, distances and inside flags, over centres inside,
+    /// outside and on the surface, and radii from a grazing touch to the whole body.
+    #[test]
+    fn the_nearest_face_first_answers_as_every_face_tested() {
+        use crate::model::Serials;
+        use crate::model::solids::{sphere, torus};
+        use std::sync::Arc;
+        let mut serials = Serials::new();
+        let bodies = [
+            sphere(&mut serials, 2.0, 12, 7).expect("a sphere"),
+            torus(&mut serials, 3.0, 1.0, 16, 8).expect("a torus"),
+        ];
+        let mut seed = 0x853c_49e6_748f_ea9b_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut met, mut missed, mut inside) = (0, 0, 0);
+        for body in bodies {
+            let shape = BodyShape::build(Arc::new(body));
+            assert!(shape.faces.len() > NEAREST_FIRST);
+            let corners: Vec<DVec3> = shape.points.clone();
+            for i in 0..600 {
+                // Some centres at a vertex (on the surface), the rest anywhere about.
+                let c = if i % 10 == 0 {
+                    corners[i % corners.len()]
+                } else {
+                    DVec3::new(next(), next(), next()) * 10.0 - 5.0
+                };
+                let r = [0.0, 1e-9, 0.3, 1.0, 2.5, 9.0][i % 6];
+                let answer = |detail| {
+                    let mut out = Features::default();
+                    ball(&shape, &Pose::IDENTITY, c, r, detail, 1e-3, &mut out)
+                };
+                let quick = answer(Detail::Bodies);
+                assert_eq!(quick, answer(Detail::Features), "at {c}, r {r}");
+                match quick {
+                    Some((_, true)) => inside += 1,
+                    Some(_) => met += 1,
+                    None => missed += 1,
+                }
+            }
+        }
+        assert!(
+            met > 100 && missed > 100 && inside > 50,
+            "{met} {missed} {inside}"
+        );
+    }
 
     #[test]
     fn features_sort_by_id_over_narrow_and_wide_id_ranges() {

@@ -290,6 +290,20 @@ fn terrain(table: &mut Table) {
             rr,
             p,
         );
+        // The same balls at `bodies` detail: whether the terrain (and which of its
+        // walls' bodies) meets each, with its distance; the peers have no such answer.
+        let (wb, _) = data::time_each(&centers, |c| {
+            let q = SphereQuery::new(c, r).with_detail(Detail::Bodies);
+            spatial.sphere(&q).expect("a valid query").bodies.len()
+        });
+        let f = |t: Timings| format!("{:.2} / {:.2} ({:.2})", t.p50, t.p99, t.mean);
+        table.row(
+            set,
+            &format!("sphere, bodies, radius {r:.3} m"),
+            f(wb),
+            "—".into(),
+            "—".into(),
+        );
     }
 }
 
@@ -700,6 +714,67 @@ fn profile_moves(args: &[String]) {
     );
 }
 
+/// `profile-phases [hits]`: where a terrain query's wall time goes. Over the same
+/// centres, in turn and three times: the hierarchy's walk alone (the candidate faces
+/// gathered), the walk and the touch of every candidate's records, and the whole query at
+/// `bodies` and at `features` detail; each the mean over all centres, in µs.
+fn profile_phases(args: &[String]) {
+    let target: f64 = args.first().and_then(|s| s.parse().ok()).unwrap_or(120.0);
+    let t = Terrain::new();
+    let centers = t.centers(QUERIES, 1);
+    let spatial = Spatial::build(Arc::new(t.world().0));
+    let r = data::calibrate(target, &centers[..CALIBRATION], 0.01, 20.0, |c, r| {
+        let q = SphereQuery::new(c, r).with_detail(Detail::Features);
+        let a = spatial.sphere(&q).expect("a valid query");
+        a.bodies
+            .iter()
+            .map(|b| b.faces.as_ref().map_or(0, Vec::len))
+            .sum()
+    });
+    let (_, body) = spatial
+        .world()
+        .bodies()
+        .find(|(_, n)| n.body.face_count() > 0)
+        .expect("the terrain");
+    let shape = winged::spatial::shape::BodyShape::build(body.body.clone());
+    println!("terrain: radius {r:.3} for about {target} faces");
+    let mean = |f: &mut dyn FnMut(DVec3) -> u64| {
+        let start = Instant::now();
+        let mut acc = 0u64;
+        for &c in &centers {
+            acc = acc.wrapping_add(f(c));
+        }
+        std::hint::black_box(acc);
+        start.elapsed().as_secs_f64() * 1e6 / centers.len() as f64
+    };
+    let r2 = r * r;
+    for round in 1..=3 {
+        let walk = mean(&mut |c| {
+            let mut v: Vec<u32> = Vec::with_capacity(256);
+            shape.bvh.within(c, r2, |k| v.push(k as u32));
+            v.len() as u64
+        });
+        let touch = mean(&mut |c| {
+            let mut v: Vec<u32> = Vec::with_capacity(256);
+            shape.bvh.within(c, r2, |k| v.push(k as u32));
+            v.iter().fold(0, |a, &k| a ^ shape.touch(k as usize))
+        });
+        let spatial = &spatial;
+        let whole = |detail: Detail| {
+            move |c: DVec3| {
+                let q = SphereQuery::new(c, r).with_detail(detail);
+                spatial.sphere(&q).expect("a valid query").bodies.len() as u64
+            }
+        };
+        let bodies = mean(&mut whole(Detail::Bodies));
+        let features = mean(&mut whole(Detail::Features));
+        println!(
+            "round {round}: walk {walk:.2} µs, walk and touch {touch:.2} µs, \
+             query at bodies {bodies:.2} µs, at features {features:.2} µs"
+        );
+    }
+}
+
 /// Dependent reads per chase in `profile-moves`.
 const CHASE: usize = 8;
 
@@ -754,6 +829,7 @@ fn main() {
         Some("profile") => return profile(&args[1..]),
         Some("profile-build") => return profile_build(&args[1..]),
         Some("profile-moves") => return profile_moves(&args[1..]),
+        Some("profile-phases") => return profile_phases(&args[1..]),
         _ => {}
     }
     let which = args.first().cloned().unwrap_or_default();
