@@ -7,6 +7,7 @@
 //! target/release/spatial-peers profile city 15 bodies   # winged alone, for perf
 //! target/release/spatial-peers profile-build terrain 5   # winged's builds alone
 //! target/release/spatial-peers profile-moves 2000        # winged's moves, and a read
+//! target/release/spatial-peers profile-phases 120        # a terrain query, step by step
 //! ```
 //!
 //! Data (`bench/spatial/data.rs`): a closed terrain solid of 1,000,000 triangles and a
