@@ -281,16 +281,31 @@ impl Bvh {
     /// `r2_cull` (a squared distance) of `p`.
     #[inline]
     pub fn within(&self, p: DVec3, r2_cull: f64, mut visit: impl FnMut(usize)) {
-        self.walk(|n| n.distance_squared(p) <= r2_cull, &mut visit);
+        self.walk(|n| n.distance_squared(p) <= r2_cull, &mut |k| {
+            visit(k);
+            true
+        });
     }
 
     /// Calls `visit(k)` for each leaf position `k` whose leaf box meets `lo..=hi`.
     #[inline]
     pub fn overlapping(&self, lo: DVec3, hi: DVec3, mut visit: impl FnMut(usize)) {
+        self.overlapping_until(lo, hi, |k| {
+            visit(k);
+            true
+        });
+    }
+
+    /// [`Bvh::overlapping`] until `visit` answers `false`: no leaf position is visited
+    /// after that.
+    #[inline]
+    pub fn overlapping_until(&self, lo: DVec3, hi: DVec3, mut visit: impl FnMut(usize) -> bool) {
         self.walk(|n| n.overlaps(lo, hi), &mut visit);
     }
 
-    fn walk(&self, mut enter: impl FnMut(&Node) -> bool, visit: &mut impl FnMut(usize)) {
+    /// Visits the leaf positions of the leaves reached through nodes `enter` accepts,
+    /// until `visit` answers `false`.
+    fn walk(&self, mut enter: impl FnMut(&Node) -> bool, visit: &mut impl FnMut(usize) -> bool) {
         if self.nodes.is_empty() || !enter(&self.nodes[0]) {
             return;
         }
@@ -301,7 +316,9 @@ impl Bvh {
             let n = &self.nodes[stack[top] as usize];
             if n.is_leaf() {
                 for k in n.first..n.first + n.count {
-                    visit(k as usize);
+                    if !visit(k as usize) {
+                        return;
+                    }
                 }
                 continue;
             }

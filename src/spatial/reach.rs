@@ -385,7 +385,8 @@ pub fn aabb(
     let mut met = false;
     let mut pts: Vec<DVec3> = Vec::new();
     let in_box = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
-    shape.bvh.overlapping(local.min, local.max, |k| {
+    // At `bodies` detail the walk stops at the first face that meets the box.
+    shape.bvh.overlapping_until(local.min, local.max, |k| {
         let cs = shape.corners_of(k);
         pts.clear();
         pts.extend(shape.loop_points(k).map(|p| pose.transform_point(p)));
@@ -404,7 +405,7 @@ pub fn aabb(
             (!meets || detail == Detail::Portions).then(|| clip_polygon_box(&pts, lo, hi));
         meets |= clipped.as_ref().is_some_and(|c| !c.is_empty());
         if !meets {
-            return;
+            return true;
         }
         met = true;
         if features {
@@ -419,6 +420,7 @@ pub fn aabb(
                 portion,
             });
         }
+        features
     });
     let centre = inverse.transform_point((lo + hi) * 0.5);
     let inside = shape.contains(centre);
@@ -478,6 +480,58 @@ mod tests {
         }
         assert!(
             met > 100 && missed > 100 && inside > 50,
+            "{met} {missed} {inside}"
+        );
+    }
+
+    /// A box query at `bodies` detail, which stops at the first face that meets the
+    /// box, answers as `features` detail, which tests every face: the same bodies met
+    /// and the same inside flags, over boxes inside, outside, across and around bodies.
+    #[test]
+    fn a_box_at_bodies_detail_answers_as_every_face_tested() {
+        use crate::model::Serials;
+        use crate::model::solids::{sphere, torus};
+        use std::sync::Arc;
+        let mut serials = Serials::new();
+        let bodies = [
+            sphere(&mut serials, 2.0, 12, 7).expect("a sphere"),
+            torus(&mut serials, 3.0, 1.0, 16, 8).expect("a torus"),
+        ];
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let pose = Pose::new(
+            DVec3::new(0.5, -0.25, 1.0),
+            glam::DQuat::from_rotation_z(0.3),
+        )
+        .expect("a pose");
+        let inverse = pose.inverse();
+        let (mut met, mut missed, mut inside) = (0, 0, 0);
+        for body in bodies {
+            let shape = BodyShape::build(Arc::new(body));
+            for i in 0..600 {
+                let c = DVec3::new(next(), next(), next()) * 10.0 - 5.0;
+                let half = DVec3::new(next(), next(), next()) * [0.05, 0.5, 2.0, 6.0][i % 4];
+                let (lo, hi) = (c - half, c + half);
+                let answer = |detail| {
+                    let mut out = Features::default();
+                    aabb(&shape, &pose, &inverse, lo, hi, detail, &mut out)
+                };
+                let quick = answer(Detail::Bodies);
+                assert_eq!(quick, answer(Detail::Features), "box {lo}..{hi}");
+                match quick {
+                    Some(true) => inside += 1,
+                    Some(false) => met += 1,
+                    None => missed += 1,
+                }
+            }
+        }
+        assert!(
+            met > 100 && missed > 100 && inside > 20,
             "{met} {missed} {inside}"
         );
     }

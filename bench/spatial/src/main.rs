@@ -41,7 +41,7 @@ use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{AABB, RTree};
 use winged::model::{Pose, World};
-use winged::spatial::{Detail, Spatial, SphereAnswer, SphereQuery};
+use winged::spatial::{BoxQuery, Detail, Spatial, SphereAnswer, SphereQuery};
 
 // ------------------------------------------------------------------ counting allocator
 
@@ -717,8 +717,9 @@ fn profile_moves(args: &[String]) {
 
 /// `profile-phases [hits]`: where a terrain query's wall time goes. Over the same
 /// centres, in turn and three times: the hierarchy's walk alone (the candidate faces
-/// gathered), the walk and the touch of every candidate's records, and the whole query at
-/// `bodies` and at `features` detail; each the mean over all centres, in µs.
+/// gathered), the walk and the touch of every candidate's records, the whole query at
+/// `bodies` and at `features` detail, and the box query of the ball's bounding box at
+/// each; each the mean over all centres, in µs.
 fn profile_phases(args: &[String]) {
     let target: f64 = args.first().and_then(|s| s.parse().ok()).unwrap_or(120.0);
     let t = Terrain::new();
@@ -769,9 +770,20 @@ fn profile_phases(args: &[String]) {
         };
         let bodies = mean(&mut whole(Detail::Bodies));
         let features = mean(&mut whole(Detail::Features));
+        // The ball's bounding box as a box query, at each detail.
+        let boxed = |detail: Detail| {
+            move |c: DVec3| {
+                let mut q = BoxQuery::new(c - DVec3::splat(r), c + DVec3::splat(r));
+                q.detail = detail;
+                spatial.aabb(&q).expect("a valid query").bodies.len() as u64
+            }
+        };
+        let box_bodies = mean(&mut boxed(Detail::Bodies));
+        let box_features = mean(&mut boxed(Detail::Features));
         println!(
             "round {round}: walk {walk:.2} µs, walk and touch {touch:.2} µs, \
-             query at bodies {bodies:.2} µs, at features {features:.2} µs"
+             query at bodies {bodies:.2} µs, at features {features:.2} µs; \
+             its box at bodies {box_bodies:.2} µs, at features {box_features:.2} µs"
         );
     }
 }
