@@ -20,7 +20,7 @@ use std::fmt;
 use std::ops::{Deref, DerefMut};
 use std::sync::Arc;
 
-use imbl::OrdMap;
+use imbl::{OrdMap, Vector};
 use serde::{Deserialize, Serialize};
 
 use super::body::Body;
@@ -77,8 +77,10 @@ pub struct BodyNode {
     pub name: Option<String>,
     /// The whole this body is a part of (the root is its own supart).
     pub supart: BodyId,
-    /// The sub-parts, in the order they were attached (PART, then COPART links).
-    pub parts: Vec<BodyId>,
+    /// The sub-parts, in the order they were attached (PART, then COPART links). A
+    /// persistent vector: a world snapshot shares it, and a write that adds or removes
+    /// one part copies a path of it, not the whole list (the root may list every body).
+    pub parts: Vector<BodyId>,
     /// This body's frame placed in its supart's frame.
     pub pose: Pose,
     /// The polyhedron, behind an `Arc` so that cloning the world (a snapshot) shares
@@ -262,7 +264,7 @@ impl PartsTree {
             BodyNode {
                 name: Some(Self::ROOT_NAME.to_owned()),
                 supart: root,
-                parts: Vec::new(),
+                parts: Vector::new(),
                 pose: Pose::IDENTITY,
                 body: Arc::new(Body::empty()),
                 color: None,
@@ -313,8 +315,8 @@ impl PartsTree {
     }
 
     /// The sub-parts of `b`, in attachment order.
-    pub fn parts(&self, b: BodyId) -> Option<&[BodyId]> {
-        self.nodes.get(&b).map(|n| n.parts.as_slice())
+    pub fn parts(&self, b: BodyId) -> Option<&Vector<BodyId>> {
+        self.nodes.get(&b).map(|n| &n.parts)
     }
 
     /// FDNAME: the body with this name.
@@ -494,14 +496,14 @@ impl PartsTree {
             .get_mut(&supart)
             .expect("supart is live")
             .parts
-            .push(id);
+            .push_back(id);
         self.size = self.size.plus(Size::of(&body));
         self.nodes.insert(
             id,
             BodyNode {
                 name,
                 supart,
-                parts: Vec::new(),
+                parts: Vector::new(),
                 pose,
                 body,
                 color: None,
@@ -516,13 +518,13 @@ impl PartsTree {
         debug_assert!(b != self.root && !self.is_within(supart, b));
         let old = self.nodes[&b].supart;
         if let Some(o) = self.nodes.get_mut(&old) {
-            o.parts.retain(|&p| p != b);
+            remove_part(&mut o.parts, b);
         }
         self.nodes
             .get_mut(&supart)
             .expect("supart is live")
             .parts
-            .push(b);
+            .push_back(b);
         self.nodes.get_mut(&b).expect("b is live").supart = supart;
     }
 
@@ -546,7 +548,7 @@ impl PartsTree {
         let ids = self.subtree(b);
         let supart = self.nodes[&b].supart;
         if let Some(s) = self.nodes.get_mut(&supart) {
-            s.parts.retain(|&p| p != b);
+            remove_part(&mut s.parts, b);
         }
         ids.into_iter()
             .map(|id| {
@@ -558,6 +560,25 @@ impl PartsTree {
                 (id, node)
             })
             .collect()
+    }
+}
+
+/// Removes `b` from the parts list `parts`, where it is listed at most once (DET): the
+/// others keep their order.
+fn remove_part(parts: &mut Vector<BodyId>, b: BodyId) {
+    // Ids are issued in increasing order, so a list its bodies were only ever added to
+    // is sorted, and a binary search finds `b` in it. A list that is not sorted (a body
+    // was attached later) may hide `b` from the search: it is then searched leaf by
+    // leaf, each a slice, from the end (the parts attached last are found first).
+    let found = parts.binary_search(&b).ok().or_else(|| {
+        let mut after = parts.len();
+        parts.leaves().rev().find_map(|leaf| {
+            after -= leaf.len();
+            leaf.iter().position(|&p| p == b).map(|i| after + i)
+        })
+    });
+    if let Some(i) = found {
+        parts.remove(i);
     }
 }
 
@@ -604,7 +625,7 @@ mod tests {
             .get_mut(&twice.root)
             .expect("root")
             .parts
-            .push(b);
+            .push_back(b);
         assert_eq!(problems_of(&twice, "is listed as a part 2 times"), 1);
         assert_eq!(problems_of(&twice, "whose supart differs"), 1);
 
@@ -617,6 +638,38 @@ mod tests {
         let mut miscounted = t.clone();
         miscounted.size.faces += 1;
         assert_eq!(problems_of(&miscounted, "is not its bodies' total"), 1);
+    }
+
+    /// DET from a parts list of many leaves removes that part wherever it is listed,
+    /// keeps the others in order, and leaves a snapshot of the list as it was.
+    #[test]
+    fn a_part_is_removed_from_a_long_list_wherever_it_is() {
+        let ids: Vec<BodyId> = (1..=1000).map(|i| BodyId(Serial(i))).collect();
+        let mut parts: Vector<BodyId> = ids.iter().copied().collect();
+        let snapshot = parts.clone();
+        let mut want = ids.clone();
+        for at in [999, 0, 500, 63, 64, 700] {
+            let b = want.remove(at.min(want.len() - 1));
+            remove_part(&mut parts, b);
+            assert_eq!(parts.iter().copied().collect::<Vec<_>>(), want, "after {b}");
+        }
+        remove_part(&mut parts, BodyId(Serial(5000)));
+        assert_eq!(parts.len(), want.len());
+        assert_eq!(snapshot.iter().copied().collect::<Vec<_>>(), ids);
+        // Out of order (bodies attached later): every part is still found.
+        let mut shuffled: Vec<BodyId> = ids.clone();
+        shuffled.rotate_left(300);
+        shuffled.swap(10, 900);
+        let mut parts: Vector<BodyId> = shuffled.iter().copied().collect();
+        for b in ids.iter().rev().step_by(7) {
+            remove_part(&mut parts, *b);
+            shuffled.retain(|p| p != b);
+            assert_eq!(
+                parts.iter().copied().collect::<Vec<_>>(),
+                shuffled,
+                "after {b}"
+            );
+        }
     }
 
     #[test]
@@ -635,6 +688,6 @@ mod tests {
             );
         }
         assert_eq!(t.check(), Vec::<String>::new());
-        assert_eq!(t.parts(root).map(<[BodyId]>::len), Some(20_000));
+        assert_eq!(t.parts(root).map(Vector::len), Some(20_000));
     }
 }

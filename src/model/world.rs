@@ -242,7 +242,7 @@ impl World {
     }
 
     /// The sub-parts of `b`, in attachment order.
-    pub fn parts(&self, b: BodyId) -> Option<&[BodyId]> {
+    pub fn parts(&self, b: BodyId) -> Option<&imbl::Vector<BodyId>> {
         self.tree.parts(b)
     }
 
@@ -929,7 +929,13 @@ impl World {
             let sb = self.tree.supart(b).expect("b is live");
             self.relink_in_place(a, sb);
         }
-        let parts = self.tree.parts(b).expect("b is live").to_vec();
+        let parts: Vec<BodyId> = self
+            .tree
+            .parts(b)
+            .expect("b is live")
+            .iter()
+            .copied()
+            .collect();
         for p in parts {
             self.relink_in_place(p, a);
         }

@@ -330,7 +330,7 @@ impl Spatial {
                 let mut stack: Vec<BodyId> = ids.to_vec();
                 while let Some(id) = stack.pop() {
                     if let Some(parts) = self.refresh(&world, id, &mut stats) {
-                        stack.extend_from_slice(parts);
+                        stack.extend(parts.iter().copied());
                     }
                 }
             }
@@ -364,9 +364,9 @@ impl Spatial {
         world: &'w World,
         id: BodyId,
         stats: &mut SyncStats,
-    ) -> Option<&'w [BodyId]> {
+    ) -> Option<&'w imbl::Vector<BodyId>> {
         let found = world.node(id);
-        let parts = found.map(|n| n.parts.as_slice());
+        let parts = found.map(|n| &n.parts);
         let at = self.by_id.get(&id).copied();
         // Whether the body is the very one the entry was made from.
         let kept = found
