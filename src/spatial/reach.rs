@@ -430,6 +430,36 @@ pub fn aabb(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Serials;
+    use crate::model::solids::{sphere, torus};
+    use std::sync::Arc;
+
+    /// A xorshift generator of `u64`s from `seed` (not zero).
+    fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        }
+    }
+
+    /// Uniform numbers in `[0, 1)` from `seed` (not zero).
+    fn unit(seed: u64) -> impl FnMut() -> f64 {
+        let mut next = xorshift(seed);
+        move || (next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Two shapes of more than [`NEAREST_FIRST`] faces: a sphere (convex; triangles and
+    /// quadrilaterals) and a torus (of genus 1, with saddles).
+    fn large_shapes() -> [BodyShape; 2] {
+        let mut serials = Serials::new();
+        [
+            sphere(&mut serials, 2.0, 12, 7).expect("a sphere"),
+            torus(&mut serials, 3.0, 1.0, 16, 8).expect("a torus"),
+        ]
+        .map(|b| BodyShape::build(Arc::new(b)))
+    }
 
     /// A large body's answer at `bodies` detail, which starts from its face nearest the
     /// centre, is the answer of testing every face in the ball (as `features` detail
@@ -437,24 +467,9 @@ mod tests {
     /// outside and on the surface, and radii from a grazing touch to the whole body.
     #[test]
     fn the_nearest_face_first_answers_as_every_face_tested() {
-        use crate::model::Serials;
-        use crate::model::solids::{sphere, torus};
-        use std::sync::Arc;
-        let mut serials = Serials::new();
-        let bodies = [
-            sphere(&mut serials, 2.0, 12, 7).expect("a sphere"),
-            torus(&mut serials, 3.0, 1.0, 16, 8).expect("a torus"),
-        ];
-        let mut seed = 0x853c_49e6_748f_ea9b_u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = unit(0x853c_49e6_748f_ea9b);
         let (mut met, mut missed, mut inside) = (0, 0, 0);
-        for body in bodies {
-            let shape = BodyShape::build(Arc::new(body));
+        for shape in large_shapes() {
             assert!(shape.faces.len() > NEAREST_FIRST);
             let corners: Vec<DVec3> = shape.points.clone();
             for i in 0..600 {
@@ -489,21 +504,7 @@ mod tests {
     /// and the same inside flags, over boxes inside, outside, across and around bodies.
     #[test]
     fn a_box_at_bodies_detail_answers_as_every_face_tested() {
-        use crate::model::Serials;
-        use crate::model::solids::{sphere, torus};
-        use std::sync::Arc;
-        let mut serials = Serials::new();
-        let bodies = [
-            sphere(&mut serials, 2.0, 12, 7).expect("a sphere"),
-            torus(&mut serials, 3.0, 1.0, 16, 8).expect("a torus"),
-        ];
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = unit(0x2545_f491_4f6c_dd1d);
         let pose = Pose::new(
             DVec3::new(0.5, -0.25, 1.0),
             glam::DQuat::from_rotation_z(0.3),
@@ -511,8 +512,7 @@ mod tests {
         .expect("a pose");
         let inverse = pose.inverse();
         let (mut met, mut missed, mut inside) = (0, 0, 0);
-        for body in bodies {
-            let shape = BodyShape::build(Arc::new(body));
+        for shape in large_shapes() {
             for i in 0..600 {
                 let c = DVec3::new(next(), next(), next()) * 10.0 - 5.0;
                 let half = DVec3::new(next(), next(), next()) * [0.05, 0.5, 2.0, 6.0][i % 4];
@@ -538,13 +538,7 @@ mod tests {
 
     #[test]
     fn features_sort_by_id_over_narrow_and_wide_id_ranges() {
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next = xorshift(0x2545_f491_4f6c_dd1d);
         // Ids close together (packed keys), and spanning all of u64 (the direct sort).
         for spread in [1_000u64, u64::MAX] {
             for n in [0, 1, 2, 5, 120, 1000] {

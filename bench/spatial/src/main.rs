@@ -147,6 +147,11 @@ fn mb(bytes: usize) -> String {
 }
 
 /// The table printed at the end: rows of (data set, measure, winged, rstar, parry3d).
+/// Timings as a table cell: p50 / p99 (mean).
+fn cell(t: Timings) -> String {
+    format!("{:.2} / {:.2} ({:.2})", t.p50, t.p99, t.mean)
+}
+
 #[derive(Default)]
 struct Table {
     rows: Vec<[String; 5]>,
@@ -159,8 +164,12 @@ impl Table {
     }
 
     fn timings(&mut self, set: &str, what: &str, w: Timings, r: Timings, p: Timings) {
-        let f = |t: Timings| format!("{:.2} / {:.2} ({:.2})", t.p50, t.p99, t.mean);
-        self.row(set, what, f(w), f(r), f(p));
+        self.row(set, what, cell(w), cell(r), cell(p));
+    }
+
+    /// A row of winged's timings alone (the peers have no such answer).
+    fn winged_only(&mut self, set: &str, what: &str, w: Timings) {
+        self.row(set, what, cell(w), "—".into(), "—".into());
     }
 
     fn print(&self) {
@@ -297,14 +306,7 @@ fn terrain(table: &mut Table) {
             let q = SphereQuery::new(c, r).with_detail(Detail::Bodies);
             spatial.sphere(&q).expect("a valid query").bodies.len()
         });
-        let f = |t: Timings| format!("{:.2} / {:.2} ({:.2})", t.p50, t.p99, t.mean);
-        table.row(
-            set,
-            &format!("sphere, bodies, radius {r:.3} m"),
-            f(wb),
-            "—".into(),
-            "—".into(),
-        );
+        table.winged_only(set, &format!("sphere, bodies, radius {r:.3} m"), wb);
     }
 }
 
@@ -443,13 +445,10 @@ fn city(table: &mut Table) {
             let q = SphereQuery::new(c, r).with_detail(Detail::Features);
             spatial.sphere(&q).expect("a valid query").bodies.len()
         });
-        let f = |t: Timings| format!("{:.2} / {:.2} ({:.2})", t.p50, t.p99, t.mean);
-        table.row(
+        table.winged_only(
             set,
             &format!("sphere, features (faces, edges, vertices of each body), radius {r:.2} m"),
-            f(wf),
-            "—".into(),
-            "—".into(),
+            wf,
         );
     }
 
