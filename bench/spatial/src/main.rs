@@ -667,7 +667,11 @@ fn profile_moves(args: &[String]) {
     let mut spatial = Spatial::build(current.clone());
     let mut rng = data::Rng::new(5);
     let mut ns = Vec::with_capacity(count);
-    let chase_log2: u32 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(23).min(30);
+    let chase_log2: u32 = args
+        .get(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(23)
+        .min(30);
     let cycle = random_cycle(1 << chase_log2, 9);
     let mut reads = Vec::with_capacity(count);
     let mut writes = Vec::with_capacity(count);
