@@ -36,16 +36,6 @@ const CALIBRATION: usize = 300;
 /// Distinct bodies moved one after the other for the percentiles of a move.
 const MOVES: usize = 300;
 
-/// Faces answered, over all bodies.
-fn faces(spatial: &Spatial, c: DVec3, r: f64) -> usize {
-    let q = SphereQuery::new(c, r).with_detail(Detail::Features);
-    let a = spatial.sphere(&q).expect("a valid query");
-    a.bodies
-        .iter()
-        .map(|b| b.faces.as_ref().map_or(0, Vec::len))
-        .sum()
-}
-
 /// Bodies answered.
 fn bodies(spatial: &Spatial, c: DVec3, r: f64, detail: Detail) -> usize {
     let q = SphereQuery::new(c, r).with_detail(detail);
@@ -56,7 +46,7 @@ fn bodies(spatial: &Spatial, c: DVec3, r: f64, detail: Detail) -> usize {
 fn report(what: &str, spatial: &Spatial, centers: &[DVec3], r: f64, detail: Detail) {
     let (t, hits) = data::time_each(centers, |c| match detail {
         Detail::Bodies => bodies(spatial, c, r, detail),
-        _ => faces(spatial, c, r),
+        _ => data::faces_answered(spatial, c, r),
     });
     let unit = if detail == Detail::Bodies {
         "bodies"
@@ -116,7 +106,9 @@ fn terrain(c: &mut Criterion) {
     let calib = &centers[..CALIBRATION];
     g.sample_size(20).measurement_time(Duration::from_secs(3));
     for target in [15.0, 120.0] {
-        let r = data::calibrate(target, calib, 0.01, 20.0, |c, r| faces(&spatial, c, r));
+        let r = data::calibrate(target, calib, 0.01, 20.0, |c, r| {
+            data::faces_answered(&spatial, c, r)
+        });
         for detail in [Detail::Bodies, Detail::Features] {
             let name = format!("sphere_{target}_faces/{}", detail.name());
             report(&format!("terrain {name}"), &spatial, &centers, r, detail);

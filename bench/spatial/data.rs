@@ -16,6 +16,7 @@ use glam::{DQuat, DVec3};
 use winged::model::solids::{BuildError, box_solid};
 use winged::model::{Body, BodyId, Pose, Serials, World};
 use winged::spatial::exact::{clip_segment_ball, drop_axis, in_polygon};
+use winged::spatial::{Detail, Spatial, SphereQuery};
 
 /// A small deterministic generator (SplitMix64).
 pub struct Rng(u64);
@@ -425,4 +426,14 @@ pub fn time_each(centers: &[DVec3], mut query: impl FnMut(DVec3) -> usize) -> (T
         hits += h;
     }
     (Timings::of(&mut ns), hits as f64 / centers.len() as f64)
+}
+
+/// Faces a sphere query at `features` detail answers, over all bodies.
+pub fn faces_answered(spatial: &Spatial, c: DVec3, r: f64) -> usize {
+    let q = SphereQuery::new(c, r).with_detail(Detail::Features);
+    let a = spatial.sphere(&q).expect("a valid query");
+    a.bodies
+        .iter()
+        .map(|b| b.faces.as_ref().map_or(0, Vec::len))
+        .sum()
 }

@@ -571,14 +571,7 @@ fn profile(args: &[String]) {
     let (world, centers, count): (World, Vec<DVec3>, HitCount) = if set == "terrain" {
         let t = Terrain::new();
         let centers = t.centers(QUERIES, 1);
-        (t.world().0, centers, |s, c, r| {
-            let q = SphereQuery::new(c, r).with_detail(Detail::Features);
-            let a = s.sphere(&q).expect("a valid query");
-            a.bodies
-                .iter()
-                .map(|b| b.faces.as_ref().map_or(0, Vec::len))
-                .sum()
-        })
+        (t.world().0, centers, data::faces_answered)
     } else {
         let city = data::city();
         (
@@ -729,12 +722,7 @@ fn profile_phases(args: &[String]) {
     let centers = t.centers(QUERIES, 1);
     let spatial = Spatial::build(Arc::new(t.world().0));
     let r = data::calibrate(target, &centers[..CALIBRATION], 0.01, 20.0, |c, r| {
-        let q = SphereQuery::new(c, r).with_detail(Detail::Features);
-        let a = spatial.sphere(&q).expect("a valid query");
-        a.bodies
-            .iter()
-            .map(|b| b.faces.as_ref().map_or(0, Vec::len))
-            .sum()
+        data::faces_answered(&spatial, c, r)
     });
     let (_, body) = spatial
         .world()
