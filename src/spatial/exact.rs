@@ -472,14 +472,8 @@ mod tests {
     /// (p − a)·d and the clip from |a − c|² − r², |b − c|² − r², 2 (a − c)·d.
     #[test]
     fn a_segment_seen_from_a_point_answers_bit_for_bit_as_the_separate_tests() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
-        };
-        let mut point = || DVec3::new(next(), next(), next());
+        let mut next = crate::spatial::testing::unit(0x9e37_79b9_7f4a_7c15);
+        let mut point = || DVec3::new(next(), next(), next()) * 4.0 - 2.0;
         for _ in 0..10_000 {
             let (a, b, p) = (point(), point(), point());
             let r = p.x.abs() + 0.5;

@@ -224,15 +224,7 @@ mod tests {
     use super::*;
     use crate::model::Serial;
     use crate::spatial::query::FaceHit;
-
-    fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        }
-    }
+    use crate::spatial::testing::xorshift;
 
     #[test]
     fn hits_sort_by_distance_then_id_through_ties_and_near_ties() {

@@ -23,6 +23,8 @@ pub mod index;
 pub mod query;
 mod reach;
 pub mod shape;
+#[cfg(test)]
+mod testing;
 
 pub use index::{Fork, Spatial, SyncStats};
 pub use query::{

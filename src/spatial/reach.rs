@@ -432,23 +432,8 @@ mod tests {
     use super::*;
     use crate::model::Serials;
     use crate::model::solids::{sphere, torus};
+    use crate::spatial::testing::{unit, xorshift};
     use std::sync::Arc;
-
-    /// A xorshift generator of `u64`s from `seed` (not zero).
-    fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        }
-    }
-
-    /// Uniform numbers in `[0, 1)` from `seed` (not zero).
-    fn unit(seed: u64) -> impl FnMut() -> f64 {
-        let mut next = xorshift(seed);
-        move || (next() >> 11) as f64 / (1u64 << 53) as f64
-    }
 
     /// Two shapes of more than [`NEAREST_FIRST`] faces: a sphere (convex; triangles and
     /// quadrilaterals) and a torus (of genus 1, with saddles).

@@ -591,12 +591,7 @@ fn profile(args: &[String]) {
     println!("{set}: radius {r:.3} for about {target} hits; querying for {seconds} s");
     if set == "terrain" {
         // How many faces the body's hierarchy leaves for the exact test.
-        let (_, body) = spatial
-            .world()
-            .bodies()
-            .find(|(_, n)| n.body.face_count() > 0)
-            .expect("the terrain");
-        let shape = winged::spatial::shape::BodyShape::build(body.body.clone());
+        let shape = terrain_shape(&spatial);
         let sample = &centers[..CALIBRATION];
         let mut visited = 0usize;
         for &c in sample {
@@ -711,6 +706,17 @@ fn profile_moves(args: &[String]) {
     );
 }
 
+/// The terrain body's shape (its faces, laid out as the index lays them out), from the
+/// world `spatial` was built over.
+fn terrain_shape(spatial: &Spatial) -> winged::spatial::shape::BodyShape {
+    let (_, body) = spatial
+        .world()
+        .bodies()
+        .find(|(_, n)| n.body.face_count() > 0)
+        .expect("the terrain");
+    winged::spatial::shape::BodyShape::build(body.body.clone())
+}
+
 /// `profile-phases [hits]`: where a terrain query's wall time goes. Over the same
 /// centres, in turn and three times: the hierarchy's walk alone (the candidate faces
 /// gathered), the walk and the touch of every candidate's records, the whole query at
@@ -724,12 +730,7 @@ fn profile_phases(args: &[String]) {
     let r = data::calibrate(target, &centers[..CALIBRATION], 0.01, 20.0, |c, r| {
         data::faces_answered(&spatial, c, r)
     });
-    let (_, body) = spatial
-        .world()
-        .bodies()
-        .find(|(_, n)| n.body.face_count() > 0)
-        .expect("the terrain");
-    let shape = winged::spatial::shape::BodyShape::build(body.body.clone());
+    let shape = terrain_shape(&spatial);
     println!("terrain: radius {r:.3} for about {target} faces");
     let mean = |f: &mut dyn FnMut(DVec3) -> u64| {
         let start = Instant::now();
