@@ -180,6 +180,54 @@ pub struct Bvh {
     order: Vec<u32>,
 }
 
+/// Nodes waiting to be walked: first in, first out while they fit in a ring on the
+/// stack (the walk is then breadth first, and allocates nothing); nodes that find the
+/// ring full wait in a spill list, taken last in, first out once the ring is empty.
+/// Every node pushed is popped once, whatever the order.
+struct Frontier {
+    ring: [u32; Frontier::RING],
+    /// Pops so far from the ring (its head is `head % RING`).
+    head: usize,
+    /// Pushes so far to the ring.
+    tail: usize,
+    spill: Vec<u32>,
+}
+
+impl Frontier {
+    /// Ring slots: more than the widest level of a query of a few hundred leaves.
+    const RING: usize = 256;
+
+    fn new() -> Frontier {
+        Frontier {
+            ring: [0; Frontier::RING],
+            head: 0,
+            tail: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    #[inline]
+    fn push(&mut self, i: u32) {
+        if self.tail - self.head < Frontier::RING {
+            self.ring[self.tail % Frontier::RING] = i;
+            self.tail += 1;
+        } else {
+            self.spill.push(i);
+        }
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<u32> {
+        if self.head < self.tail {
+            let i = self.ring[self.head % Frontier::RING];
+            self.head += 1;
+            Some(i)
+        } else {
+            self.spill.pop()
+        }
+    }
+}
+
 /// A primitive while building: its box and centroid.
 #[derive(Clone, Copy)]
 struct Item {
@@ -305,15 +353,18 @@ impl Bvh {
 
     /// Visits the leaf positions of the leaves reached through nodes `enter` accepts,
     /// until `visit` answers `false`.
+    ///
+    /// The walk is breadth first (see [`Frontier`]): every node of one level is read
+    /// before any of the next so that, on a hierarchy out of cache, their misses overlap
+    /// (a depth-first walk waits for each node's line before it can read the next).
     fn walk(&self, mut enter: impl FnMut(&Node) -> bool, visit: &mut impl FnMut(usize) -> bool) {
         if self.nodes.is_empty() || !enter(&self.nodes[0]) {
             return;
         }
-        let mut stack = [0u32; 64];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let n = &self.nodes[stack[top] as usize];
+        let mut frontier = Frontier::new();
+        frontier.push(0);
+        while let Some(i) = frontier.pop() {
+            let n = &self.nodes[i as usize];
             if n.is_leaf() {
                 for k in n.first..n.first + n.count {
                     if !visit(k as usize) {
@@ -324,8 +375,7 @@ impl Bvh {
             }
             for c in [n.first, n.first + 1] {
                 if enter(&self.nodes[c as usize]) {
-                    stack[top] = c;
-                    top += 1;
+                    frontier.push(c);
                 }
             }
         }
@@ -799,6 +849,45 @@ mod tests {
             .collect();
         assert!(!want.is_empty());
         assert_eq!(got, want);
+    }
+
+    #[test]
+    fn a_walk_wider_than_the_ring_visits_every_leaf_position_once() {
+        // A box over everything: every level is in the frontier at once, far more than
+        // the ring holds, so the spill list carries the rest.
+        let bs = boxes(20_000);
+        let bvh = Bvh::build(&bs);
+        let leaves = bvh.leaves().count();
+        assert!(leaves > 2 * Frontier::RING, "{leaves} leaves");
+        let mut visits = vec![0u32; bs.len()];
+        bvh.overlapping(DVec3::splat(-10.0), DVec3::splat(110.0), |k| visits[k] += 1);
+        assert!(visits.iter().all(|&v| v == 1));
+        // A walk told to stop visits nothing more.
+        let mut seen = 0;
+        bvh.overlapping_until(DVec3::splat(-10.0), DVec3::splat(110.0), |_| {
+            seen += 1;
+            seen < 1000
+        });
+        assert_eq!(seen, 1000);
+    }
+
+    #[test]
+    fn the_frontier_pops_every_push_once_in_and_beyond_its_ring() {
+        let mut f = Frontier::new();
+        let n = 3 * Frontier::RING as u32;
+        let mut popped = Vec::new();
+        // Interleaved pushes and pops, so that the ring wraps and then overflows.
+        for i in 0..n {
+            f.push(i);
+            if i % 3 == 0 {
+                popped.extend(f.pop());
+            }
+        }
+        while let Some(i) = f.pop() {
+            popped.push(i);
+        }
+        popped.sort_unstable();
+        assert_eq!(popped, (0..n).collect::<Vec<_>>());
     }
 
     #[test]
