@@ -56,7 +56,10 @@ impl Features {
 /// are sorted by id directly.
 fn sort_by_id<T>(items: &mut Vec<T>, id: impl Fn(&T) -> u64, take: impl Fn(&mut T) -> T) {
     let n = items.len();
-    if n < 2 {
+    if n <= SORT_IN_PLACE {
+        // A few items (a small body's): sorted where they lie, without the keys' and
+        // the gathered list's allocations.
+        items.sort_unstable_by_key(id);
         return;
     }
     let (lo, hi) = items
@@ -80,6 +83,9 @@ fn sort_by_id<T>(items: &mut Vec<T>, id: impl Fn(&T) -> u64, take: impl Fn(&mut 
         .map(|&k| take(&mut items[(k & low) as usize]))
         .collect();
 }
+
+/// Items at most that [`sort_by_id`] sorts in place.
+const SORT_IN_PLACE: usize = 20;
 
 /// How much a squared cull radius is widened so that rounding in box distances never
 /// drops a face that the exact test would keep.
@@ -139,7 +145,7 @@ pub fn ball(
     // The candidate faces are gathered first and touched in one tight loop of
     // independent reads (`BodyShape::touch`), so that the cache misses of a query on a
     // large shape overlap instead of following one another through the tests.
-    let mut candidates: Vec<u32> = Vec::with_capacity(256);
+    let mut candidates: Vec<u32> = Vec::with_capacity(shape.faces.len().min(256));
     shape.bvh.within(c, cull2, |k| candidates.push(k as u32));
     let touched = candidates
         .iter()
@@ -147,10 +153,17 @@ pub fn ball(
     std::hint::black_box(touched);
     if features {
         // Most candidate faces meet the ball, with about as many edges as faces (each
-        // edge reported by one of its two faces) and half as many vertices.
-        out.faces.reserve(candidates.len());
-        out.edges.reserve(candidates.len() * 3 / 2);
-        out.vertices.reserve(candidates.len() / 2 + 1);
+        // edge reported by one of its two faces) and half as many vertices; when every
+        // face is a candidate (a small body), as many as the body has.
+        let n = candidates.len();
+        let (edges, vertices) = if n == shape.faces.len() {
+            (shape.edge_serials.len(), shape.points.len())
+        } else {
+            (n * 3 / 2, n / 2 + 1)
+        };
+        out.faces.reserve(n);
+        out.edges.reserve(edges);
+        out.vertices.reserve(vertices);
     }
     let mut nearest: Option<Closest> = None;
     for &k in &candidates {
@@ -524,9 +537,10 @@ mod tests {
     #[test]
     fn features_sort_by_id_over_narrow_and_wide_id_ranges() {
         let mut next = xorshift(0x2545_f491_4f6c_dd1d);
-        // Ids close together (packed keys), and spanning all of u64 (the direct sort).
+        // Few ids (sorted in place); ids close together (packed keys); and ids spanning
+        // all of u64 (the direct sort).
         for spread in [1_000u64, u64::MAX] {
-            for n in [0, 1, 2, 5, 120, 1000] {
+            for n in [0, 1, 2, 5, SORT_IN_PLACE, SORT_IN_PLACE + 1, 120, 1000] {
                 let mut ids: Vec<u64> = (0..n).map(|_| next() % spread).collect();
                 ids.sort_unstable();
                 ids.dedup();

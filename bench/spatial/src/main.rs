@@ -625,10 +625,13 @@ fn profile(args: &[String]) {
     let start = Instant::now();
     let mut n = 0usize;
     while start.elapsed().as_secs_f64() < seconds {
+        let reps = std::env::var("REPS").ok().and_then(|v| v.parse().ok()).unwrap_or(1);
         for &c in &centers {
-            std::hint::black_box(timed_query(&spatial, c, r, detail));
+            for _ in 0..reps {
+                std::hint::black_box(timed_query(&spatial, c, r, detail));
+            }
         }
-        n += centers.len();
+        n += centers.len() * reps;
     }
     let us = start.elapsed().as_secs_f64() * 1e6 / n as f64;
     println!("{n} queries, {us:.2} µs each");
