@@ -5,6 +5,7 @@
 //! bash bench/spatial/run.sh            # both data sets, then a table
 //! bash bench/spatial/run.sh terrain    # one data set (terrain or city)
 //! target/release/spatial-peers profile city 15 bodies   # winged alone, for perf
+//! target/release/spatial-peers profile terrain 120 features 5 8   # each centre 8 times
 //! target/release/spatial-peers profile-build terrain 5   # winged's builds alone
 //! target/release/spatial-peers profile-moves 2000        # winged's moves, and a read
 //! target/release/spatial-peers profile-phases 120        # a terrain query, step by step
@@ -558,8 +559,11 @@ fn centers_for_check() -> Vec<DVec3> {
 /// How many hits a query answers (faces of the terrain, bodies of the city).
 type HitCount = fn(&Spatial, DVec3, f64) -> usize;
 
-/// `profile <terrain|city> <hits> <bodies|features> [seconds]`: winged's sphere queries
-/// alone in a loop (about `hits` hits each), for `perf record`.
+/// `profile <terrain|city> <hits> <bodies|features> [seconds] [repeats]`: winged's sphere
+/// queries alone in a loop (about `hits` hits each), for `perf record`. With `repeats`
+/// above 1, each centre is queried that many times in a row: the repeats find what the
+/// first read in cache, so that comparing the mean with `repeats` 1 tells the cost of
+/// the misses from the cost of the work.
 fn profile(args: &[String]) {
     let set = args.first().map_or("city", String::as_str);
     let target: f64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(15.0);
@@ -568,6 +572,7 @@ fn profile(args: &[String]) {
         _ => Detail::Features,
     };
     let seconds: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(10.0);
+    let repeats: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(1).max(1);
     let (world, centers, count): (World, Vec<DVec3>, HitCount) = if set == "terrain" {
         let t = Terrain::new();
         let centers = t.centers(QUERIES, 1);
@@ -625,13 +630,12 @@ fn profile(args: &[String]) {
     let start = Instant::now();
     let mut n = 0usize;
     while start.elapsed().as_secs_f64() < seconds {
-        let reps = std::env::var("REPS").ok().and_then(|v| v.parse().ok()).unwrap_or(1);
         for &c in &centers {
-            for _ in 0..reps {
+            for _ in 0..repeats {
                 std::hint::black_box(timed_query(&spatial, c, r, detail));
             }
         }
-        n += centers.len() * reps;
+        n += centers.len() * repeats;
     }
     let us = start.elapsed().as_secs_f64() * 1e6 / n as f64;
     println!("{n} queries, {us:.2} µs each");
