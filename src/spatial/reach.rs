@@ -339,7 +339,7 @@ fn report(
 ) {
     if corner.reports_edge() {
         out.edges.push(EdgeHit {
-            id: shape.edge_serials[corner.edge as usize],
+            id: shape.edge_serials[corner.edge() as usize],
             segment: [world(lerp_exact(a, b, t0)), world(lerp_exact(a, b, t1))],
         });
     }

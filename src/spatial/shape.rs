@@ -21,8 +21,10 @@ use rayon::prelude::*;
 
 use crate::model::{Body, EdgeUse, FaceId, Side};
 
-/// No edge: the corner of an edgeless face (a seminal body's).
-pub const NO_EDGE: u32 = u32::MAX;
+/// No edge: the corner of an edgeless face (a seminal body's). Compact edge indices
+/// are below it: a body has far fewer edges (the server refuses bodies of more than
+/// two million faces).
+pub const NO_EDGE: u32 = (1 << 30) - 1;
 /// Corner flag: this corner reports its edge.
 pub const REPORT_EDGE: u8 = 1;
 /// Corner flag: this corner reports its starting vertex.
@@ -33,30 +35,48 @@ const PARALLEL_FACES: usize = 1 << 14;
 /// check costs faces × vertices, and the convex tests visit every face.
 pub const CONVEX_MAX_FACES: usize = 64;
 
-/// One corner of a face perimeter: the use of `edge` starting at `vertex`.
+/// One corner of a face perimeter: the use of an edge starting at `vertex`. Eight
+/// bytes: the edge's index and the flags share a word.
 #[derive(Clone, Copy, Debug)]
 pub struct Corner {
     /// Compact index of the vertex the use starts at.
     pub vertex: u32,
-    /// Compact index of the edge, or [`NO_EDGE`].
-    pub edge: u32,
-    /// [`REPORT_EDGE`] and/or [`REPORT_VERTEX`].
-    pub flags: u8,
+    /// The edge's compact index (or [`NO_EDGE`]) in the low 30 bits, the flags above.
+    edge_flags: u32,
 }
 
 impl Corner {
+    /// The corner starting at `vertex` on `edge` (below [`NO_EDGE`], or it), with
+    /// [`REPORT_EDGE`] and/or [`REPORT_VERTEX`] in `flags`.
+    #[inline]
+    pub fn new(vertex: u32, edge: u32, flags: u8) -> Corner {
+        debug_assert!(edge <= NO_EDGE && flags <= (REPORT_EDGE | REPORT_VERTEX));
+        Corner {
+            vertex,
+            edge_flags: edge.min(NO_EDGE) | u32::from(flags & 3) << 30,
+        }
+    }
+
+    /// Compact index of the edge, or [`NO_EDGE`].
+    #[inline]
+    pub fn edge(&self) -> u32 {
+        self.edge_flags & NO_EDGE
+    }
+
     /// Whether this corner reports its edge (the edge's canonical corner, of an edge).
     #[inline]
     pub fn reports_edge(&self) -> bool {
-        self.flags & REPORT_EDGE != 0 && self.edge != NO_EDGE
+        self.edge_flags & (u32::from(REPORT_EDGE) << 30) != 0 && self.edge() != NO_EDGE
     }
 
     /// Whether this corner reports its starting vertex (the vertex's canonical corner).
     #[inline]
     pub fn reports_vertex(&self) -> bool {
-        self.flags & REPORT_VERTEX != 0
+        self.edge_flags & (u32::from(REPORT_VERTEX) << 30) != 0
     }
 }
+
+const _: () = assert!(std::mem::size_of::<Corner>() == 8);
 
 /// The corner after corner `i` of a face's corners `cs` (the first after the last):
 /// side `i` of the face runs from `cs[i]` to it. Found without the division of
@@ -73,14 +93,53 @@ pub struct FaceRec {
     pub normal: DVec3,
     /// Plane offset: `normal · x = offset`.
     pub offset: f64,
-    /// The two coordinates kept when projecting the face for point-in-polygon tests.
-    pub axes: (u8, u8),
     /// First corner in [`BodyShape::corners`].
     pub start: u32,
-    /// Number of corners.
-    pub len: u32,
+    /// The number of corners in the low 30 bits; above them, the axis [`drop_axis`]
+    /// drops for the face's normal (0, 1 or 2).
+    len_dropped: u32,
     /// The face's serial number.
     pub serial: u64,
+}
+
+const _: () = assert!(std::mem::size_of::<FaceRec>() == 48);
+
+impl FaceRec {
+    /// The face of plane `normal · x = offset`, serial number `serial`, whose `len`
+    /// corners start at `start`. A face has fewer than 2³⁰ corners (the server refuses
+    /// bodies of more than two million faces, each face having at least one corner).
+    fn new(normal: DVec3, offset: f64, start: u32, len: u32, serial: u64) -> FaceRec {
+        let dropped = match drop_axis(normal) {
+            (1, 2) => 0,
+            (2, 0) => 1,
+            _ => 2,
+        };
+        debug_assert!(len < 1 << 30);
+        FaceRec {
+            normal,
+            offset,
+            start,
+            len_dropped: len | dropped << 30,
+            serial,
+        }
+    }
+
+    /// The number of corners.
+    #[inline]
+    pub fn corner_count(&self) -> u32 {
+        self.len_dropped & ((1 << 30) - 1)
+    }
+
+    /// The two coordinates kept when projecting the face for point-in-polygon tests:
+    /// [`drop_axis`] of its normal, found when the face was laid out.
+    #[inline]
+    pub fn axes(&self) -> (usize, usize) {
+        match self.len_dropped >> 30 {
+            0 => (1, 2),
+            1 => (2, 0),
+            _ => (0, 1),
+        }
+    }
 }
 
 /// Where on a face the closest point to a query point lies.
@@ -226,20 +285,16 @@ impl BodyShape {
                     if canonical_vertex_use(u) {
                         flags |= REPORT_VERTEX;
                     }
-                    corners.push(Corner {
-                        vertex: vix[b.origin(u).index()],
-                        edge: eix[u.edge.index()],
+                    corners.push(Corner::new(
+                        vix[b.origin(u).index()],
+                        eix[u.edge.index()],
                         flags,
-                    });
+                    ));
                 }
                 if corners.len() as u32 == start {
                     // An edgeless face (a seminal body): its polygon is the lone vertex.
                     if let Some(&v) = lone.first() {
-                        corners.push(Corner {
-                            vertex: v,
-                            edge: NO_EDGE,
-                            flags: REPORT_VERTEX,
-                        });
+                        corners.push(Corner::new(v, NO_EDGE, REPORT_VERTEX));
                     }
                 }
                 let len = corners.len() as u32 - start;
@@ -247,20 +302,18 @@ impl BodyShape {
                     Some(p) => (p.normal, p.offset),
                     None => (DVec3::ZERO, 0.0),
                 };
-                let (i, j) = drop_axis(normal);
                 boxes.push(Aabb::of_points(
                     corners[start as usize..]
                         .iter()
                         .map(|c| points[c.vertex as usize]),
                 ));
-                faces.push(FaceRec {
+                faces.push(FaceRec::new(
                     normal,
                     offset,
-                    axes: (i as u8, j as u8),
                     start,
                     len,
-                    serial: b.face_serial(f).get(),
-                });
+                    b.face_serial(f).get(),
+                ));
             }
             Laid {
                 faces,
@@ -343,7 +396,7 @@ impl BodyShape {
     #[inline]
     pub fn corners_of(&self, k: usize) -> &[Corner] {
         let f = &self.faces[k];
-        &self.corners[f.start as usize..(f.start + f.len) as usize]
+        &self.corners[f.start as usize..(f.start + f.corner_count()) as usize]
     }
 
     /// Reads what the tests of face `k` read first: the face, its first corner, that
@@ -353,7 +406,11 @@ impl BodyShape {
     #[inline]
     pub fn touch(&self, k: usize) -> u64 {
         self.corners_of(k).first().map_or(0, |c| {
-            let edge = self.edge_serials.get(c.edge as usize).copied().unwrap_or(0);
+            let edge = self
+                .edge_serials
+                .get(c.edge() as usize)
+                .copied()
+                .unwrap_or(0);
             self.points[c.vertex as usize].x.to_bits()
                 ^ self.vertex_serials[c.vertex as usize]
                 ^ edge
@@ -422,7 +479,7 @@ impl BodyShape {
         let f = &self.faces[k];
         let pd = f.normal.dot(p) - f.offset;
         let foot = p - f.normal * pd;
-        let axes = (f.axes.0 as usize, f.axes.1 as usize);
+        let axes = f.axes();
         let projected = (foot[axes.0], foot[axes.1]);
         let mut best = Closest {
             d2: f64::INFINITY,
@@ -460,7 +517,7 @@ impl BodyShape {
             return None;
         }
         let h = o + d * t;
-        let axes = (f.axes.0 as usize, f.axes.1 as usize);
+        let axes = f.axes();
         in_polygon(h, self.loop_points(k), axes)
             .then(|| (t, boundary_margin(h, self.loop_points(k))))
     }
@@ -500,7 +557,7 @@ impl BodyShape {
                 let pd = f.normal.dot(p) - f.offset;
                 if f.normal.dot(d).abs() < 1e-9 && pd.abs() <= eps {
                     // Running along a face's plane: parity means nothing.
-                    let axes = (f.axes.0 as usize, f.axes.1 as usize);
+                    let axes = f.axes();
                     if in_polygon(p, self.loop_points(k), axes)
                         || boundary_margin(p, self.loop_points(k)) <= eps
                     {
@@ -600,7 +657,7 @@ fn in_leaf_order(bvh: &Bvh, chunks: &[Laid]) -> (Vec<FaceRec>, Vec<Corner>) {
     let corners_of = |i: usize| {
         let f = face(i);
         let s = f.start as usize;
-        &chunks[i / PARALLEL_FACES].corners[s..s + f.len as usize]
+        &chunks[i / PARALLEL_FACES].corners[s..s + f.corner_count() as usize]
     };
     if order.len() <= PARALLEL_FACES {
         let mut faces = Vec::with_capacity(order.len());
@@ -621,7 +678,7 @@ fn in_leaf_order(bvh: &Bvh, chunks: &[Laid]) -> (Vec<FaceRec>, Vec<Corner>) {
     let mut at = 0u32;
     for &i in order {
         starts.push(at);
-        at += face(i as usize).len;
+        at += face(i as usize).corner_count();
     }
     starts.push(at);
     let mut faces = Vec::with_capacity(order.len());
@@ -632,11 +689,7 @@ fn in_leaf_order(bvh: &Bvh, chunks: &[Laid]) -> (Vec<FaceRec>, Vec<Corner>) {
             ..*face(order[k] as usize)
         })
         .collect_into_vec(&mut faces);
-    let blank = Corner {
-        vertex: 0,
-        edge: NO_EDGE,
-        flags: 0,
-    };
+    let blank = Corner::new(0, NO_EDGE, 0);
     let mut corners = vec![blank; at as usize];
     let mut ranges = Vec::new();
     let mut rest = corners.as_mut_slice();
@@ -663,6 +716,37 @@ mod tests {
     use crate::model::Serial;
     use crate::model::Serials;
     use crate::model::solids::sphere;
+
+    /// A corner keeps its vertex, edge and flags apart in its eight bytes, and a face
+    /// record its corner count and projection axes in one word.
+    #[test]
+    fn packed_corners_and_faces_give_back_what_they_were_made_of() {
+        for edge in [0, 1, 12_345, NO_EDGE - 1, NO_EDGE] {
+            for flags in 0..=(REPORT_EDGE | REPORT_VERTEX) {
+                let c = Corner::new(u32::MAX, edge, flags);
+                assert_eq!((c.vertex, c.edge()), (u32::MAX, edge));
+                assert_eq!(c.reports_vertex(), flags & REPORT_VERTEX != 0);
+                assert_eq!(
+                    c.reports_edge(),
+                    flags & REPORT_EDGE != 0 && edge != NO_EDGE
+                );
+            }
+        }
+        for normal in [
+            DVec3::X,
+            -DVec3::Y,
+            DVec3::Z,
+            DVec3::new(0.3, -0.9, 0.3),
+            DVec3::new(-0.6, 0.0, 0.8),
+            DVec3::ZERO,
+        ] {
+            for len in [1, 3, 4, (1 << 30) - 1] {
+                let f = FaceRec::new(normal, 2.5, 7, len, u64::MAX);
+                assert_eq!(f.axes(), drop_axis(normal), "{normal}");
+                assert_eq!((f.corner_count(), f.start, f.serial), (len, 7, u64::MAX));
+            }
+        }
+    }
 
     /// A face's sides in an array are those the iterator gives, bit for bit, and so is
     /// the closest point made from them; over triangles, quadrilaterals and pentagons.
