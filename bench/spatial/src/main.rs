@@ -453,6 +453,27 @@ fn city(table: &mut Table) {
         );
     }
 
+    // At features detail the hits are faces, as on the terrain: radii for about 15 and
+    // about 120 faces (of any bodies), winged alone (the peers keep bodies only).
+    for target in [15.0, 120.0] {
+        let r = data::calibrate(target, &centers[..CALIBRATION], 1.0, 400.0, |c, r| {
+            data::faces_answered(&spatial, c, r)
+        });
+        let bodies: usize = centers
+            .iter()
+            .map(|&c| winged_q(&spatial, &index, c, r, Detail::Bodies).len())
+            .sum();
+        let (wf, faces) = data::time_each(&centers, |c| data::faces_answered(&spatial, c, r));
+        table.winged_only(
+            set,
+            &format!(
+                "sphere, features, radius {r:.2} m, mean {faces:.1} faces of {:.1} bodies",
+                bodies as f64 / centers.len() as f64
+            ),
+            wf,
+        );
+    }
+
     // Moves: the same MOVES bodies, shifts and order for every index.
     let mut rng = data::Rng::new(3);
     let moves: Vec<(usize, DVec3)> = (0..MOVES)
@@ -560,7 +581,8 @@ fn centers_for_check() -> Vec<DVec3> {
 type HitCount = fn(&Spatial, DVec3, f64) -> usize;
 
 /// `profile <terrain|city> <hits> <bodies|features> [seconds] [repeats]`: winged's sphere
-/// queries alone in a loop (about `hits` hits each), for `perf record`. With `repeats`
+/// queries alone in a loop (about `hits` hits each: faces at `features` detail, bodies
+/// of the city at `bodies` detail), for `perf record`. With `repeats`
 /// above 1, each centre is queried that many times in a row: the repeats find what the
 /// first read in cache, so that comparing the mean with `repeats` 1 tells the cost of
 /// the misses from the cost of the work.
@@ -582,9 +604,13 @@ fn profile(args: &[String]) {
         (
             data::city_world(&city).0,
             data::city_centers(QUERIES, 2),
-            |s, c, r| {
-                let q = SphereQuery::new(c, r).with_detail(Detail::Bodies);
-                s.sphere(&q).expect("a valid query").bodies.len()
+            if detail == Detail::Features {
+                data::faces_answered
+            } else {
+                |s, c, r| {
+                    let q = SphereQuery::new(c, r).with_detail(Detail::Bodies);
+                    s.sphere(&q).expect("a valid query").bodies.len()
+                }
             },
         )
     };
