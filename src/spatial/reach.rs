@@ -398,11 +398,19 @@ pub fn aabb(
     let mut met = false;
     let mut pts: Vec<DVec3> = Vec::new();
     let in_box = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
+    let region = Aabb::new(lo, hi);
+    // A matrix maps the corners faster than the quaternion.
+    let world = pose.to_affine();
     // At `bodies` detail the walk stops at the first face that meets the box.
     shape.bvh.overlapping_until(local.min, local.max, |k| {
         let cs = shape.corners_of(k);
         pts.clear();
-        pts.extend(shape.loop_points(k).map(|p| pose.transform_point(p)));
+        pts.extend(shape.loop_points(k).map(|p| world.transform_point3(p)));
+        // A face whose world bounds miss the box has no point in it (the hierarchy's
+        // boxes are in the body's frame, so their leaves can reach past the box).
+        if !Aabb::of_points(pts.iter().copied()).overlaps(&region) {
+            return true;
+        }
         let mut meets = false;
         for (i, corner) in cs.iter().enumerate() {
             let (a, b) = (pts[i], pts[(i + 1) % pts.len()]);
