@@ -49,7 +49,7 @@ impl Features {
 /// Sorts `items` by `id`, distinct for each item; `take` moves an item out of its slot
 /// (each slot is taken once, and the slots are then dropped).
 ///
-/// When the ids span less than `2^(64 − b)`, with `b` the bits of an index into
+/// At most [`SORT_IN_PLACE`] items are sorted where they lie. For more, when the ids span less than `2^(64 − b)`, with `b` the bits of an index into
 /// `items` (always, for the features of one body), each item's key is one `u64`: its
 /// id less the least id, shifted, with its index in the low bits. The keys sort
 /// without branches, and the items are gathered in their order. Otherwise the items
