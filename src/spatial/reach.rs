@@ -467,6 +467,37 @@ mod tests {
         .map(|b| BodyShape::build(Arc::new(b)))
     }
 
+    /// How many answers met a body with the centre outside it, met it with the centre
+    /// inside, and missed it: a test's cases must cover all three.
+    #[derive(Default)]
+    struct Tally {
+        met: usize,
+        inside: usize,
+        missed: usize,
+    }
+
+    impl Tally {
+        /// Counts an answer: `Some(inside)` when the body was met.
+        fn count(&mut self, answer: Option<bool>) {
+            match answer {
+                Some(true) => self.inside += 1,
+                Some(false) => self.met += 1,
+                None => self.missed += 1,
+            }
+        }
+
+        /// Asserts that each kind of answer came more often than the floor given.
+        fn assert_over(&self, met: usize, missed: usize, inside: usize) {
+            assert!(
+                self.met > met && self.missed > missed && self.inside > inside,
+                "met {}, missed {}, inside {}",
+                self.met,
+                self.missed,
+                self.inside
+            );
+        }
+    }
+
     /// A large body's answer at `bodies` detail, which starts from its face nearest the
     /// centre, is the answer of testing every face in the ball (as `features` detail
     /// does): the same bodies met, distances and inside flags, over centres inside,
@@ -474,7 +505,7 @@ mod tests {
     #[test]
     fn the_nearest_face_first_answers_as_every_face_tested() {
         let mut next = unit(0x853c_49e6_748f_ea9b);
-        let (mut met, mut missed, mut inside) = (0, 0, 0);
+        let mut tally = Tally::default();
         for shape in large_shapes() {
             assert!(shape.faces.len() > NEAREST_FIRST);
             let corners: Vec<DVec3> = shape.points.clone();
@@ -492,17 +523,10 @@ mod tests {
                 };
                 let quick = answer(Detail::Bodies);
                 assert_eq!(quick, answer(Detail::Features), "at {c}, r {r}");
-                match quick {
-                    Some((_, true)) => inside += 1,
-                    Some(_) => met += 1,
-                    None => missed += 1,
-                }
+                tally.count(quick.map(|(_, inside)| inside));
             }
         }
-        assert!(
-            met > 100 && missed > 100 && inside > 50,
-            "{met} {missed} {inside}"
-        );
+        tally.assert_over(100, 100, 50);
     }
 
     /// A box query at `bodies` detail, which stops at the first face that meets the
@@ -517,7 +541,7 @@ mod tests {
         )
         .expect("a pose");
         let inverse = pose.inverse();
-        let (mut met, mut missed, mut inside) = (0, 0, 0);
+        let mut tally = Tally::default();
         for shape in large_shapes() {
             for i in 0..600 {
                 let c = DVec3::new(next(), next(), next()) * 10.0 - 5.0;
@@ -529,17 +553,10 @@ mod tests {
                 };
                 let quick = answer(Detail::Bodies);
                 assert_eq!(quick, answer(Detail::Features), "box {lo}..{hi}");
-                match quick {
-                    Some(true) => inside += 1,
-                    Some(false) => met += 1,
-                    None => missed += 1,
-                }
+                tally.count(quick);
             }
         }
-        assert!(
-            met > 100 && missed > 100 && inside > 20,
-            "{met} {missed} {inside}"
-        );
+        tally.assert_over(100, 100, 20);
     }
 
     #[test]
