@@ -49,11 +49,12 @@ impl Features {
 /// Sorts `items` by `id`, distinct for each item; `take` moves an item out of its slot
 /// (each slot is taken once, and the slots are then dropped).
 ///
-/// At most [`SORT_IN_PLACE`] items are sorted where they lie. For more, when the ids span less than `2^(64 − b)`, with `b` the bits of an index into
-/// `items` (always, for the features of one body), each item's key is one `u64`: its
-/// id less the least id, shifted, with its index in the low bits. The keys sort
-/// without branches, and the items are gathered in their order. Otherwise the items
-/// are sorted by id directly.
+/// At most [`SORT_IN_PLACE`] items are sorted where they lie. For more, when the ids
+/// span less than `2^(64 − b)`, with `b` the bits of an index into `items` (always,
+/// for the features of one body), each item's key is one `u64`: its id less the least
+/// id, shifted, with its index in the low bits. The keys sort without branches, and
+/// the items are gathered in their order. Otherwise the items are sorted by id
+/// directly.
 fn sort_by_id<T>(items: &mut Vec<T>, id: impl Fn(&T) -> u64, take: impl Fn(&mut T) -> T) {
     let n = items.len();
     if n <= SORT_IN_PLACE {

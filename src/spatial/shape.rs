@@ -21,10 +21,13 @@ use rayon::prelude::*;
 
 use crate::model::{Body, EdgeUse, FaceId, Side};
 
+/// The low 30 bits of a word: a corner's edge index, a face record's corner count; the
+/// two bits above them hold a few flags. Counts and indices stay far below it (the
+/// server refuses bodies of more than two million faces).
+const LOW_30: u32 = (1 << 30) - 1;
 /// No edge: the corner of an edgeless face (a seminal body's). Compact edge indices
-/// are below it: a body has far fewer edges (the server refuses bodies of more than
-/// two million faces).
-pub const NO_EDGE: u32 = (1 << 30) - 1;
+/// are below it.
+pub const NO_EDGE: u32 = LOW_30;
 /// Corner flag: this corner reports its edge.
 pub const REPORT_EDGE: u8 = 1;
 /// Corner flag: this corner reports its starting vertex.
@@ -60,7 +63,7 @@ impl Corner {
     /// Compact index of the edge, or [`NO_EDGE`].
     #[inline]
     pub fn edge(&self) -> u32 {
-        self.edge_flags & NO_EDGE
+        self.edge_flags & LOW_30
     }
 
     /// Whether this corner reports its edge (the edge's canonical corner, of an edge).
@@ -104,17 +107,16 @@ pub struct FaceRec {
 
 const _: () = assert!(std::mem::size_of::<FaceRec>() == 48);
 
+/// The coordinates [`drop_axis`] keeps when it drops axis 0, 1 or 2.
+const KEPT_AXES: [(usize, usize); 3] = [(1, 2), (2, 0), (0, 1)];
+
 impl FaceRec {
     /// The face of plane `normal · x = offset`, serial number `serial`, whose `len`
-    /// corners start at `start`. A face has fewer than 2³⁰ corners (the server refuses
-    /// bodies of more than two million faces, each face having at least one corner).
+    /// corners start at `start`. Precondition: `len` is below 2³⁰.
     fn new(normal: DVec3, offset: f64, start: u32, len: u32, serial: u64) -> FaceRec {
-        let dropped = match drop_axis(normal) {
-            (1, 2) => 0,
-            (2, 0) => 1,
-            _ => 2,
-        };
-        debug_assert!(len < 1 << 30);
+        let kept = drop_axis(normal);
+        let dropped = KEPT_AXES.iter().position(|&a| a == kept).unwrap_or(2) as u32;
+        debug_assert!(len <= LOW_30);
         FaceRec {
             normal,
             offset,
@@ -127,18 +129,14 @@ impl FaceRec {
     /// The number of corners.
     #[inline]
     pub fn corner_count(&self) -> u32 {
-        self.len_dropped & ((1 << 30) - 1)
+        self.len_dropped & LOW_30
     }
 
     /// The two coordinates kept when projecting the face for point-in-polygon tests:
     /// [`drop_axis`] of its normal, found when the face was laid out.
     #[inline]
     pub fn axes(&self) -> (usize, usize) {
-        match self.len_dropped >> 30 {
-            0 => (1, 2),
-            1 => (2, 0),
-            _ => (0, 1),
-        }
+        KEPT_AXES[(self.len_dropped >> 30) as usize % 3]
     }
 }
 
