@@ -325,6 +325,16 @@ impl Bvh {
         self.nodes.heap_bytes() + self.order.capacity() * 4
     }
 
+    /// Reads a word of every node pair (each one cache line). The answer means nothing:
+    /// see [`BodyShape::touch_all`](super::shape::BodyShape::touch_all).
+    #[inline]
+    pub fn touch(&self) -> u64 {
+        self.nodes
+            .0
+            .iter()
+            .fold(0, |acc, p| acc ^ u64::from(p.0[0].first))
+    }
+
     /// Calls `visit(k)` for each leaf position `k` whose box (by its leaf) lies within
     /// `r2_cull` (a squared distance) of `p`.
     #[inline]

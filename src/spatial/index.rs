@@ -527,7 +527,14 @@ impl Spatial {
         let mut candidates: Vec<u32> = Vec::with_capacity(256);
         self.bvh.within(q.center, r2, |k| candidates.push(k as u32));
         candidates.extend_from_slice(&self.loose);
-        if q.detail == Detail::Bodies {
+        let features = q.detail != Detail::Bodies;
+        if features {
+            // Only the bodies whose bounds reach the ball are tested: their shapes are
+            // read ahead.
+            candidates
+                .retain(|&i| self.entries[i as usize].bounds.distance_squared(q.center) <= r2);
+            self.read_ahead(&candidates);
+        } else {
             let touched = candidates
                 .iter()
                 .filter_map(|&i| self.quick[i as usize].hull)
@@ -536,7 +543,6 @@ impl Spatial {
             std::hint::black_box(touched);
         }
         // Most candidates are hits: room for them all, made once.
-        let features = q.detail != Detail::Bodies;
         let mut hits = Hits::new(features, q.max_features, q.max_bodies, candidates.len());
         let mut test = |i: usize| {
             if hits.full {
@@ -591,15 +597,48 @@ impl Spatial {
         })
     }
 
+    /// Reads ahead what the tests of the bodies `candidates` (entry indices) will read of
+    /// them: their entries' poses and their shapes' headers first, then every record of
+    /// each small shape ([`BodyShape::touch_all`]). Each pass is a loop of reads
+    /// independent of one another, so that the cache misses of a whole query overlap
+    /// instead of following one another through the tests, where each shape's records
+    /// are found through its header and each header through an entry.
+    fn read_ahead(&self, candidates: &[u32]) {
+        let headers = candidates.iter().fold(0, |acc, &i| {
+            let e = &self.entries[i as usize];
+            acc ^ e.pose.rotation.w.to_bits() ^ e.shape.touch_header()
+        });
+        let records = candidates.iter().fold(0, |acc, &i| {
+            acc ^ self.entries[i as usize].shape.touch_all()
+        });
+        std::hint::black_box(headers ^ records);
+    }
+
     /// The bodies reaching into a closed axis-aligned box, with what of them is inside.
     pub fn aabb(&self, q: &BoxQuery) -> Result<BoxAnswer, QueryError> {
         q.validate()?;
         let region = Aabb::new(q.min, q.max);
-        let mut hits = Hits::new(q.detail != Detail::Bodies, q.max_features, q.max_bodies, 0);
-        let mut visit = |i: usize| {
-            let e = &self.entries[i];
-            if hits.full || !e.bounds.overlaps(&region) {
-                return;
+        // Leaf position k holds entry k (see `build_hierarchy`). The bodies whose
+        // bounds meet the box are gathered first; at `features` detail and above, their
+        // shapes are read ahead.
+        let mut candidates: Vec<u32> = Vec::with_capacity(256);
+        self.bvh
+            .overlapping(q.min, q.max, |k| candidates.push(k as u32));
+        candidates.extend_from_slice(&self.loose);
+        candidates.retain(|&i| self.entries[i as usize].bounds.overlaps(&region));
+        if q.detail != Detail::Bodies {
+            self.read_ahead(&candidates);
+        }
+        let mut hits = Hits::new(
+            q.detail != Detail::Bodies,
+            q.max_features,
+            q.max_bodies,
+            candidates.len(),
+        );
+        for &i in &candidates {
+            let e = &self.entries[i as usize];
+            if hits.full {
+                break;
             }
             let mut f = Features::default();
             let (lo, hi) = (q.min, q.max);
@@ -612,14 +651,9 @@ impl Spatial {
                 q.detail,
                 &mut f,
             ) {
-                let named = e.name.is_some().then_some(i as u32);
+                let named = e.name.is_some().then_some(i);
                 hits.push(e.id, named, None, inside, f);
             }
-        };
-        // Leaf position k holds entry k (see `build_hierarchy`).
-        self.bvh.overlapping(q.min, q.max, &mut visit);
-        for &i in &self.loose {
-            visit(i as usize);
         }
         let bodies = hits.finish(Order::Id, |i| self.name_of(i))?;
         Ok(BoxAnswer {

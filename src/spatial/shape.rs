@@ -89,8 +89,11 @@ pub fn next_corner(cs: &[Corner], i: usize) -> &Corner {
     cs.get(i + 1).unwrap_or(&cs[0])
 }
 
-/// One face: its plane, where its corners are and its serial number.
+/// One face: its plane, where its corners are and its serial number. In C's layout,
+/// so that the normal begins the record and the serial number ends it (see
+/// [`BodyShape::touch_all`]).
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub struct FaceRec {
     /// Unit outward normal (zero for a face of no area).
     pub normal: DVec3,
@@ -105,7 +108,11 @@ pub struct FaceRec {
     pub serial: u64,
 }
 
-const _: () = assert!(std::mem::size_of::<FaceRec>() == 48);
+const _: () = assert!(
+    std::mem::size_of::<FaceRec>() == 48
+        && std::mem::offset_of!(FaceRec, normal) == 0
+        && std::mem::offset_of!(FaceRec, serial) == 40
+);
 
 /// The coordinates [`drop_axis`] keeps when it drops axis 0, 1 or 2.
 const KEPT_AXES: [(usize, usize); 3] = [(1, 2), (2, 0), (0, 1)];
@@ -415,6 +422,38 @@ impl BodyShape {
         })
     }
 
+    /// Reads where the shape's lists lie, and its size: the shape's own record, which
+    /// [`BodyShape::touch_all`] and the tests read through. The answer means nothing;
+    /// a caller reads many shapes so, one after another, for their cache misses to
+    /// overlap.
+    #[inline]
+    pub fn touch_header(&self) -> u64 {
+        (self.faces.as_ptr() as u64)
+            ^ (self.corners.as_ptr() as u64)
+            ^ (self.points.as_ptr() as u64)
+            ^ (self.vertex_serials.as_ptr() as u64)
+            ^ (self.edge_serials.as_ptr() as u64)
+            ^ self.size.to_bits()
+    }
+
+    /// Reads a word of every cache line of the shape's records: its hierarchy's nodes,
+    /// faces, corners, loci and serial numbers, when it has at most
+    /// [`TOUCH_ALL_FACES`] faces (nothing otherwise). The answer means nothing; a
+    /// caller reads many small shapes so, one after another, for their cache misses to
+    /// overlap before it tests them.
+    #[inline]
+    pub fn touch_all(&self) -> u64 {
+        if self.faces.len() > TOUCH_ALL_FACES {
+            return 0;
+        }
+        self.bvh.touch()
+            ^ touch_lines(&self.faces, |f| f.normal.x.to_bits() ^ f.serial)
+            ^ touch_lines(&self.corners, |c| u64::from(c.vertex))
+            ^ touch_lines(&self.points, |p| p.x.to_bits() ^ p.z.to_bits())
+            ^ touch_lines(&self.vertex_serials, |&s| s)
+            ^ touch_lines(&self.edge_serials, |&s| s)
+    }
+
     /// Face `k`'s perimeter loci, in order.
     #[inline]
     pub fn loop_points(&self, k: usize) -> impl Iterator<Item = DVec3> + Clone + '_ {
@@ -603,6 +642,22 @@ impl BodyShape {
     }
 }
 
+/// The most faces a shape has for [`BodyShape::touch_all`] to read it whole.
+pub const TOUCH_ALL_FACES: usize = 64;
+
+/// `word` of the items of `items` at most a cache line apart, and of the last one,
+/// folded. When `word` reads an item's first and last words, every cache line the
+/// items span holds a word read (an item is at most a line long).
+#[inline]
+fn touch_lines<T>(items: &[T], word: impl Fn(&T) -> u64) -> u64 {
+    let step = (64 / std::mem::size_of::<T>().max(1)).max(1);
+    let last = items.last().map_or(0, &word);
+    items
+        .iter()
+        .step_by(step)
+        .fold(last, |acc, t| acc ^ word(t))
+}
+
 /// How near the surface of a body of diagonal `size` a point counts as on it.
 #[inline]
 fn surface_eps(size: f64) -> f64 {
@@ -744,6 +799,50 @@ mod tests {
                 assert_eq!((f.corner_count(), f.start, f.serial), (len, 7, u64::MAX));
             }
         }
+    }
+
+    /// Reading each visited item's first and last words, `touch_lines` reads a word in
+    /// every cache line its items span, for items of a corner's, a locus's and a face
+    /// record's sizes, wherever the items start.
+    #[test]
+    fn touch_lines_reads_every_line_the_items_span() {
+        fn check<T: Clone>(item: T, first: impl Fn(&T) -> usize, last: impl Fn(&T) -> usize) {
+            let size = std::mem::size_of::<T>();
+            let backing = vec![item; 80];
+            for skip in 0..8 {
+                for len in 0..40 {
+                    let items = &backing[skip..skip + len];
+                    let read = std::cell::RefCell::new(std::collections::BTreeSet::new());
+                    touch_lines(items, |t| {
+                        let mut read = read.borrow_mut();
+                        read.insert(first(t) / 64);
+                        read.insert(last(t) / 64);
+                        0
+                    });
+                    let start = items.as_ptr() as usize;
+                    let spanned: std::collections::BTreeSet<usize> =
+                        (start..start + len * size).map(|a| a / 64).collect();
+                    assert_eq!(*read.borrow(), spanned, "{size}-byte items, {skip} {len}");
+                }
+            }
+        }
+        let at = |p: *const u8| p as usize;
+        check(
+            0u64,
+            |s: &u64| at(std::ptr::from_ref(s).cast()),
+            |s| at(std::ptr::from_ref(s).cast()),
+        );
+        check(
+            DVec3::ZERO,
+            |p: &DVec3| at(std::ptr::from_ref(&p.x).cast()),
+            |p| at(std::ptr::from_ref(&p.z).cast()),
+        );
+        let face = FaceRec::new(DVec3::Z, 1.0, 0, 4, 9);
+        check(
+            face,
+            |f: &FaceRec| at(std::ptr::from_ref(&f.normal.x).cast()),
+            |f| at(std::ptr::from_ref(&f.serial).cast()),
+        );
     }
 
     /// A face's sides in an array are those the iterator gives, bit for bit, and so is
