@@ -606,7 +606,8 @@ impl Spatial {
     fn read_ahead(&self, candidates: &[u32]) {
         let headers = candidates.iter().fold(0, |acc, &i| {
             let e = &self.entries[i as usize];
-            acc ^ e.pose.rotation.w.to_bits() ^ e.shape.touch_header()
+            let pose = e.pose.rotation.w.to_bits() ^ e.pose.position.x.to_bits();
+            acc ^ pose ^ e.shape.touch_header()
         });
         let records = candidates.iter().fold(0, |acc, &i| {
             acc ^ self.entries[i as usize].shape.touch_all()
