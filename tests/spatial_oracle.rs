@@ -15,7 +15,7 @@ use winged::model::{BodyId, Pose, World, WorldError};
 use winged::spatial::exact::{
     clip_segment_ball, clip_segment_box, drop_axis, in_polygon, segment_closest,
 };
-use winged::spatial::{BoxQuery, Detail, Spatial, SphereQuery};
+use winged::spatial::{BodyHit, BoxQuery, Detail, Spatial, SphereQuery};
 
 /// A small deterministic generator (PCG-style LCG), so failures replay.
 struct Rng(u64);
@@ -367,6 +367,79 @@ fn detail_levels_agree_on_the_bodies() {
     }
 }
 
+/// Checks a box query at `features` detail against the brute-force oracle; answers the
+/// number of bodies hit.
+fn check_box(index: &Spatial, w: &World, lo: DVec3, hi: DVec3) -> usize {
+    let answer = index.aabb(&BoxQuery::new(lo, hi)).expect("valid");
+    // The oracle: vertices inside, edges clipped by slabs, and bodies touched by
+    // either or holding the box's centre.
+    let centre = (lo + hi) * 0.5;
+    let mut want: BTreeMap<u64, (Vec<u64>, Vec<u64>, bool)> = BTreeMap::new();
+    for (id, node) in w.bodies() {
+        if node.body.vertex_count() == 0 {
+            continue;
+        }
+        let pose = w.world_pose(id).expect("live");
+        let b = &node.body;
+        let vs: Vec<u64> = b
+            .vertices()
+            .filter(|&v| {
+                let p = pose.transform_point(b.position(v));
+                p.cmpge(lo).all() && p.cmple(hi).all()
+            })
+            .map(|v| b.vertex_serial(v).get())
+            .collect();
+        let mut es: Vec<u64> = b
+            .edges()
+            .filter(|&e| {
+                let [n, p] = b.edge(e).vt;
+                clip_segment_box(
+                    pose.transform_point(b.position(n)),
+                    pose.transform_point(b.position(p)),
+                    lo,
+                    hi,
+                )
+                .is_some()
+            })
+            .map(|e| b.edge_serial(e).get())
+            .collect();
+        es.sort_unstable();
+        let polys: Vec<Vec<DVec3>> = world_polys(w, id).into_iter().map(|p| p.1).collect();
+        let inside = winding(&polys, centre) > 0.5;
+        let mut vs = vs;
+        vs.sort_unstable();
+        want.insert(id.get(), (vs, es, inside));
+    }
+    for hit in &answer.bodies {
+        let (vs, es, inside) = &want[&hit.id];
+        assert_eq!(hit.inside, *inside, "inside of {}", hit.id);
+        let got_v: Vec<u64> = hit
+            .vertices
+            .as_ref()
+            .expect("features")
+            .iter()
+            .map(|v| v.id)
+            .collect();
+        let got_e: Vec<u64> = hit
+            .edges
+            .as_ref()
+            .expect("features")
+            .iter()
+            .map(|e| e.id)
+            .collect();
+        assert_eq!(&got_v, vs, "vertices of {} in {lo}..{hi}", hit.id);
+        assert_eq!(&got_e, es, "edges of {} in {lo}..{hi}", hit.id);
+    }
+    // Every body with an edge or a vertex in the box, or holding it, is answered.
+    let answered: Vec<u64> = answer.bodies.iter().map(|b| b.id).collect();
+    for (id, (vs, es, inside)) in &want {
+        if !vs.is_empty() || !es.is_empty() || *inside {
+            assert!(answered.contains(id), "body {id} missing from {lo}..{hi}");
+        }
+    }
+    answer.bodies.len()
+}
+
 #[test]
 fn box_queries_match_the_brute_force_oracle() {
     let mut hits = 0;
@@ -377,77 +450,72 @@ fn box_queries_match_the_brute_force_oracle() {
         for _ in 0..100 {
             let lo = rng.vec(-14.0, 12.0);
             let hi = lo + rng.vec(0.05, 5.0);
-            let answer = index.aabb(&BoxQuery::new(lo, hi)).expect("valid");
-            // The oracle: vertices inside, edges clipped by slabs, and bodies touched by
-            // either or holding the box's centre.
-            let centre = (lo + hi) * 0.5;
-            let mut want: BTreeMap<u64, (Vec<u64>, Vec<u64>, bool)> = BTreeMap::new();
-            for (id, node) in w.bodies() {
-                if node.body.vertex_count() == 0 {
-                    continue;
-                }
-                let pose = w.world_pose(id).expect("live");
-                let b = &node.body;
-                let vs: Vec<u64> = b
-                    .vertices()
-                    .filter(|&v| {
-                        let p = pose.transform_point(b.position(v));
-                        p.cmpge(lo).all() && p.cmple(hi).all()
-                    })
-                    .map(|v| b.vertex_serial(v).get())
-                    .collect();
-                let mut es: Vec<u64> = b
-                    .edges()
-                    .filter(|&e| {
-                        let [n, p] = b.edge(e).vt;
-                        clip_segment_box(
-                            pose.transform_point(b.position(n)),
-                            pose.transform_point(b.position(p)),
-                            lo,
-                            hi,
-                        )
-                        .is_some()
-                    })
-                    .map(|e| b.edge_serial(e).get())
-                    .collect();
-                es.sort_unstable();
-                let polys: Vec<Vec<DVec3>> = world_polys(&w, id).into_iter().map(|p| p.1).collect();
-                let inside = winding(&polys, centre) > 0.5;
-                let mut vs = vs;
-                vs.sort_unstable();
-                want.insert(id.get(), (vs, es, inside));
-            }
-            for hit in &answer.bodies {
-                let (vs, es, inside) = &want[&hit.id];
-                assert_eq!(hit.inside, *inside, "inside of {}", hit.id);
-                let got_v: Vec<u64> = hit
-                    .vertices
-                    .as_ref()
-                    .expect("features")
-                    .iter()
-                    .map(|v| v.id)
-                    .collect();
-                let got_e: Vec<u64> = hit
-                    .edges
-                    .as_ref()
-                    .expect("features")
-                    .iter()
-                    .map(|e| e.id)
-                    .collect();
-                assert_eq!(&got_v, vs, "vertices of {} in {lo}..{hi}", hit.id);
-                assert_eq!(&got_e, es, "edges of {} in {lo}..{hi}", hit.id);
-            }
-            // Every body with an edge or a vertex in the box, or holding it, is answered.
-            let answered: Vec<u64> = answer.bodies.iter().map(|b| b.id).collect();
-            for (id, (vs, es, inside)) in &want {
-                if !vs.is_empty() || !es.is_empty() || *inside {
-                    assert!(answered.contains(id), "body {id} missing from {lo}..{hi}");
-                }
-            }
-            hits += answer.bodies.len();
+            hits += check_box(&index, &w, lo, hi);
         }
     }
     assert!(hits > 100, "only {hits} hits");
+}
+
+/// The faces, edges and vertices a body's answer lists.
+fn feature_count(b: &BodyHit) -> usize {
+    b.faces.as_ref().map_or(0, Vec::len)
+        + b.edges.as_ref().map_or(0, Vec::len)
+        + b.vertices.as_ref().map_or(0, Vec::len)
+}
+
+/// Queries that reach more bodies than the index reads ahead at once (64) answer as
+/// the oracle does, and a budget of features that runs out past the first bodies still
+/// refuses the query.
+#[test]
+fn queries_reaching_many_bodies_match_the_oracle_and_keep_their_budget() {
+    let w = Arc::new(random_world(21, 200));
+    let index = Spatial::build(w.clone());
+    let mut rng = Rng(21);
+    let mut most = 0;
+    for _ in 0..8 {
+        let c = rng.vec(-4.0, 4.0);
+        most = most.max(check_sphere(&index, &w, c, rng.range(14.0, 30.0)));
+        let lo = rng.vec(-30.0, -10.0);
+        let hi = rng.vec(10.0, 30.0);
+        most = most.max(check_box(&index, &w, lo, hi));
+    }
+    assert!(most > 2 * 64, "at most {most} bodies in one answer");
+
+    let mut q = SphereQuery::new(DVec3::ZERO, 40.0).with_detail(Detail::Features);
+    let answer = index.sphere(&q).expect("within the default budget");
+    assert!(
+        answer.bodies.len() > 2 * 64,
+        "{} bodies",
+        answer.bodies.len()
+    );
+    let features: usize = answer.bodies.iter().map(feature_count).sum();
+    q.max_features = features;
+    assert_eq!(index.sphere(&q).expect("at the budget"), answer);
+    q.max_features = features - 1;
+    assert_eq!(
+        index.sphere(&q),
+        Err(winged::spatial::QueryError::TooManyFeatures {
+            limit: features - 1
+        })
+    );
+
+    let mut q = BoxQuery::new(DVec3::splat(-40.0), DVec3::splat(40.0));
+    let answer = index.aabb(&q).expect("within the default budget");
+    assert!(
+        answer.bodies.len() > 2 * 64,
+        "{} bodies",
+        answer.bodies.len()
+    );
+    let features: usize = answer.bodies.iter().map(feature_count).sum();
+    q.max_features = features;
+    assert_eq!(index.aabb(&q).expect("at the budget"), answer);
+    q.max_features = features - 1;
+    assert_eq!(
+        index.aabb(&q),
+        Err(winged::spatial::QueryError::TooManyFeatures {
+            limit: features - 1
+        })
+    );
 }
 
 #[test]

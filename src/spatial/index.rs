@@ -39,6 +39,10 @@ const LOOSE_MAX: usize = 64;
 /// Numbers held by released hull records tolerated before a rebuild (besides half of
 /// all).
 const HULL_GARBAGE_MIN: usize = 1 << 16;
+/// Bodies a query at `features` detail reads ahead at a time (see
+/// [`Spatial::read_ahead`]): enough for their misses to overlap, few enough (about 64 KB
+/// for boxes) to stay in cache until they are tested.
+const READ_AHEAD_BODIES: usize = 64;
 /// The most primitives a hierarchy leaf holds.
 const LEAF_BOXES: usize = super::bvh::LEAF_LIMIT;
 
@@ -530,10 +534,9 @@ impl Spatial {
         let features = q.detail != Detail::Bodies;
         if features {
             // Only the bodies whose bounds reach the ball are tested: their shapes are
-            // read ahead.
+            // read ahead, a batch at a time (see `read_ahead`).
             candidates
                 .retain(|&i| self.entries[i as usize].bounds.distance_squared(q.center) <= r2);
-            self.read_ahead(&candidates);
         } else {
             let touched = candidates
                 .iter()
@@ -544,9 +547,10 @@ impl Spatial {
         }
         // Most candidates are hits: room for them all, made once.
         let mut hits = Hits::new(features, q.max_features, q.max_bodies, candidates.len());
-        let mut test = |i: usize| {
+        // Whether the query goes on after body `i`: not once the budget has run out.
+        let mut test = |i: usize| -> bool {
             if hits.full {
-                return;
+                return false;
             }
             // A record settles most small convex bodies at `bodies` detail. It meets the
             // ball only when the body is nearer than the radius, so the bounds (looser)
@@ -561,11 +565,11 @@ impl Spatial {
                     let named = quick.named.then_some(i as u32);
                     hits.push_body(quick.id, named, Some(distance), inside);
                 }
-                return;
+                return !hits.full;
             }
             let e = &self.entries[i];
             if e.bounds.distance_squared(q.center) > r2 {
-                return;
+                return true;
             }
             let mut f = Features::default();
             let c = e.pose.inverse().transform_point(q.center);
@@ -581,9 +585,15 @@ impl Spatial {
                 let named = e.name.is_some().then_some(i as u32);
                 hits.push(e.id, named, Some(distance), inside, f);
             }
+            !hits.full
         };
-        for &i in &candidates {
-            test(i as usize);
+        for batch in candidates.chunks(READ_AHEAD_BODIES) {
+            if features {
+                self.read_ahead(batch);
+            }
+            if !batch.iter().all(|&i| test(i as usize)) {
+                break;
+            }
         }
         let tolerance = hits.tolerance;
         let bodies = hits.finish(Order::Distance, |i| self.name_of(i))?;
@@ -600,9 +610,11 @@ impl Spatial {
     /// Reads ahead what the tests of the bodies `candidates` (entry indices) will read of
     /// them: their entries' poses and their shapes' headers first, then every record of
     /// each small shape ([`BodyShape::touch_all`]). Each pass is a loop of reads
-    /// independent of one another, so that the cache misses of a whole query overlap
+    /// independent of one another, so that the cache misses of many bodies overlap
     /// instead of following one another through the tests, where each shape's records
-    /// are found through its header and each header through an entry.
+    /// are found through its header and each header through an entry. Queries read
+    /// ahead [`READ_AHEAD_BODIES`] at a time, so that one refused for its budget reads
+    /// little past the body where it stopped.
     fn read_ahead(&self, candidates: &[u32]) {
         let headers = candidates.iter().fold(0, |acc, &i| {
             let e = &self.entries[i as usize];
@@ -627,20 +639,17 @@ impl Spatial {
             .overlapping(q.min, q.max, |k| candidates.push(k as u32));
         candidates.extend_from_slice(&self.loose);
         candidates.retain(|&i| self.entries[i as usize].bounds.overlaps(&region));
-        if q.detail != Detail::Bodies {
-            self.read_ahead(&candidates);
-        }
-        let mut hits = Hits::new(
-            q.detail != Detail::Bodies,
-            q.max_features,
-            q.max_bodies,
-            candidates.len(),
-        );
-        for &i in &candidates {
-            let e = &self.entries[i as usize];
+        let features = q.detail != Detail::Bodies;
+        let mut hits = Hits::new(features, q.max_features, q.max_bodies, candidates.len());
+        for (n, &i) in candidates.iter().enumerate() {
             if hits.full {
                 break;
             }
+            if features && n % READ_AHEAD_BODIES == 0 {
+                let end = (n + READ_AHEAD_BODIES).min(candidates.len());
+                self.read_ahead(&candidates[n..end]);
+            }
+            let e = &self.entries[i as usize];
             let mut f = Features::default();
             let (lo, hi) = (q.min, q.max);
             if let Some(inside) = reach::aabb(
