@@ -15,7 +15,9 @@ use winged::model::{BodyId, Pose, World, WorldError};
 use winged::spatial::exact::{
     clip_segment_ball, clip_segment_box, drop_axis, in_polygon, segment_closest,
 };
-use winged::spatial::{BodyHit, BoxQuery, Detail, Spatial, SphereQuery};
+use winged::spatial::{
+    BodyHit, BoxQuery, DEFAULT_MAX_FEATURES, Detail, QueryError, Spatial, SphereQuery,
+};
 
 /// A small deterministic generator (PCG-style LCG), so failures replay.
 struct Rng(u64);
@@ -481,38 +483,31 @@ fn queries_reaching_many_bodies_match_the_oracle_and_keep_their_budget() {
     }
     assert!(most > 2 * 64, "at most {most} bodies in one answer");
 
-    let mut q = SphereQuery::new(DVec3::ZERO, 40.0).with_detail(Detail::Features);
-    let answer = index.sphere(&q).expect("within the default budget");
-    assert!(
-        answer.bodies.len() > 2 * 64,
-        "{} bodies",
-        answer.bodies.len()
-    );
-    let features: usize = answer.bodies.iter().map(feature_count).sum();
-    q.max_features = features;
-    assert_eq!(index.sphere(&q).expect("at the budget"), answer);
-    q.max_features = features - 1;
-    assert_eq!(
-        index.sphere(&q),
-        Err(winged::spatial::QueryError::TooManyFeatures {
-            limit: features - 1
-        })
-    );
+    let q = SphereQuery::new(DVec3::ZERO, 40.0).with_detail(Detail::Features);
+    budget_holds(|max_features| {
+        index
+            .sphere(&SphereQuery { max_features, ..q })
+            .map(|a| a.bodies)
+    });
+    let q = BoxQuery::new(DVec3::splat(-40.0), DVec3::splat(40.0));
+    budget_holds(|max_features| {
+        index
+            .aabb(&BoxQuery { max_features, ..q })
+            .map(|a| a.bodies)
+    });
+}
 
-    let mut q = BoxQuery::new(DVec3::splat(-40.0), DVec3::splat(40.0));
-    let answer = index.aabb(&q).expect("within the default budget");
-    assert!(
-        answer.bodies.len() > 2 * 64,
-        "{} bodies",
-        answer.bodies.len()
-    );
-    let features: usize = answer.bodies.iter().map(feature_count).sum();
-    q.max_features = features;
-    assert_eq!(index.aabb(&q).expect("at the budget"), answer);
-    q.max_features = features - 1;
+/// A query that `ask(budget)` runs, answered with more than 128 bodies within the
+/// default budget, gives the same answer at a budget of exactly its features and is
+/// refused one under it.
+fn budget_holds(ask: impl Fn(usize) -> Result<Vec<BodyHit>, QueryError>) {
+    let answer = ask(DEFAULT_MAX_FEATURES).expect("within the default budget");
+    assert!(answer.len() > 2 * 64, "{} bodies", answer.len());
+    let features: usize = answer.iter().map(feature_count).sum();
+    assert_eq!(ask(features).as_ref(), Ok(&answer));
     assert_eq!(
-        index.aabb(&q),
-        Err(winged::spatial::QueryError::TooManyFeatures {
+        ask(features - 1),
+        Err(QueryError::TooManyFeatures {
             limit: features - 1
         })
     );
@@ -839,6 +834,6 @@ fn a_body_limit_refuses_an_answer_over_it() {
     q.max_bodies = all - 1;
     assert_eq!(
         index.sphere(&q),
-        Err(winged::spatial::QueryError::TooManyBodies { limit: all - 1 })
+        Err(QueryError::TooManyBodies { limit: all - 1 })
     );
 }
