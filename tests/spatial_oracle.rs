@@ -238,13 +238,7 @@ fn check_sphere(index: &Spatial, w: &World, c: DVec3, r: f64) -> usize {
             hit.id,
             t.distance
         );
-        let faces: Vec<u64> = hit
-            .faces
-            .as_ref()
-            .expect("features")
-            .iter()
-            .map(|f| f.id)
-            .collect();
+        let faces = listed(&hit.faces, |f| f.id);
         assert_eq!(
             faces,
             t.faces.keys().copied().collect::<Vec<_>>(),
@@ -415,20 +409,8 @@ fn check_box(index: &Spatial, w: &World, lo: DVec3, hi: DVec3) -> usize {
     for hit in &answer.bodies {
         let (vs, es, inside) = &want[&hit.id];
         assert_eq!(hit.inside, *inside, "inside of {}", hit.id);
-        let got_v: Vec<u64> = hit
-            .vertices
-            .as_ref()
-            .expect("features")
-            .iter()
-            .map(|v| v.id)
-            .collect();
-        let got_e: Vec<u64> = hit
-            .edges
-            .as_ref()
-            .expect("features")
-            .iter()
-            .map(|e| e.id)
-            .collect();
+        let got_v = listed(&hit.vertices, |v| v.id);
+        let got_e = listed(&hit.edges, |e| e.id);
         assert_eq!(&got_v, vs, "vertices of {} in {lo}..{hi}", hit.id);
         assert_eq!(&got_e, es, "edges of {} in {lo}..{hi}", hit.id);
     }
@@ -456,6 +438,11 @@ fn box_queries_match_the_brute_force_oracle() {
         }
     }
     assert!(hits > 100, "only {hits} hits");
+}
+
+/// The ids of a list of features an answer at `features` detail gives.
+fn listed<T>(list: &Option<Vec<T>>, id: impl Fn(&T) -> u64) -> Vec<u64> {
+    list.as_ref().expect("features").iter().map(id).collect()
 }
 
 /// The faces, edges and vertices a body's answer lists.
