@@ -641,28 +641,30 @@ impl Spatial {
         candidates.retain(|&i| self.entries[i as usize].bounds.overlaps(&region));
         let features = q.detail != Detail::Bodies;
         let mut hits = Hits::new(features, q.max_features, q.max_bodies, candidates.len());
-        for (n, &i) in candidates.iter().enumerate() {
-            if hits.full {
-                break;
-            }
-            if features && n % READ_AHEAD_BODIES == 0 {
-                let end = (n + READ_AHEAD_BODIES).min(candidates.len());
-                self.read_ahead(&candidates[n..end]);
-            }
+        // Whether the query goes on after body `i`: not once the budget has run out.
+        let mut test = |i: u32| -> bool {
             let e = &self.entries[i as usize];
             let mut f = Features::default();
-            let (lo, hi) = (q.min, q.max);
             if let Some(inside) = reach::aabb(
                 &e.shape,
                 &e.pose,
                 &e.pose.inverse(),
-                lo,
-                hi,
+                q.min,
+                q.max,
                 q.detail,
                 &mut f,
             ) {
                 let named = e.name.is_some().then_some(i);
                 hits.push(e.id, named, None, inside, f);
+            }
+            !hits.full
+        };
+        for batch in candidates.chunks(READ_AHEAD_BODIES) {
+            if features {
+                self.read_ahead(batch);
+            }
+            if !batch.iter().all(|&i| test(i)) {
+                break;
             }
         }
         let bodies = hits.finish(Order::Id, |i| self.name_of(i))?;

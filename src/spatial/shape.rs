@@ -802,8 +802,8 @@ mod tests {
     }
 
     /// Reading each visited item's first and last words, `touch_lines` reads a word in
-    /// every cache line its items span, for items of a corner's, a locus's and a face
-    /// record's sizes, wherever the items start.
+    /// every cache line its items span, for items of 8 bytes (a corner, a serial
+    /// number), 24 (a locus) and 48 (a face record), wherever the items start.
     #[test]
     fn touch_lines_reads_every_line_the_items_span() {
         fn check<T: Clone>(item: T, first: impl Fn(&T) -> usize, last: impl Fn(&T) -> usize) {
