@@ -526,6 +526,24 @@ impl Bvh {
         growth
     }
 
+    /// Reads the nodes of the first `levels` ancestors of node `leaf`, found through
+    /// `parents` (as [`Bvh::refit`] takes it). The answer means nothing; a caller reads
+    /// them so before it refits, for their cache misses to overlap the reads of the
+    /// leaf's own boxes instead of following them one level at a time.
+    #[inline]
+    pub fn touch_path(&self, parents: &[u32], leaf: u32, levels: usize) -> u64 {
+        let mut i = leaf as usize;
+        let mut acc = 0;
+        for _ in 0..levels {
+            if i == 0 {
+                break;
+            }
+            i = parents[i] as usize;
+            acc ^= u64::from(self.nodes[i].first);
+        }
+        acc
+    }
+
     /// Total half surface area of all nodes (the SAH cost scale).
     pub fn total_half_area(&self) -> f64 {
         self.nodes
@@ -924,6 +942,30 @@ mod tests {
             .filter_map(|b| b.ray_entry(p, d))
             .fold(f64::INFINITY, f64::min);
         assert_eq!(t, want);
+    }
+
+    /// `touch_path` reads the ancestors of a leaf, nearest first, as far as asked and no
+    /// further than the root.
+    #[test]
+    fn touch_path_reads_the_ancestors_up_to_the_root() {
+        let bvh = Bvh::build(&boxes(2000));
+        let parents = bvh.parents();
+        let mut deepest = 0;
+        for &leaf in bvh.leaf_of_positions().iter().step_by(37) {
+            let mut path = Vec::new();
+            let mut n = leaf as usize;
+            while n != 0 {
+                n = parents[n] as usize;
+                path.push(u64::from(bvh.node(n).first));
+            }
+            deepest = deepest.max(path.len());
+            for levels in 0..=path.len() + 2 {
+                let want = path.iter().take(levels).fold(0, |acc, f| acc ^ f);
+                assert_eq!(bvh.touch_path(&parents, leaf, levels), want, "leaf {leaf}");
+            }
+        }
+        assert!(deepest > 4, "a hierarchy {deepest} deep");
+        assert_eq!(bvh.touch_path(&parents, 0, 3), 0);
     }
 
     #[test]
