@@ -531,9 +531,10 @@ impl Spatial {
     pub fn sphere(&self, q: &SphereQuery) -> Result<SphereAnswer, QueryError> {
         q.validate()?;
         let r2 = cull_radius2(q.radius);
-        // The candidates are gathered first and their records touched in one tight loop
-        // of independent reads, so that the cache misses of a query overlap instead of
-        // following one another through the tests. Leaf position k holds entry k (see
+        // The candidates are gathered first and what their tests read is read ahead in
+        // loops of independent reads (their records at `bodies` detail, their shapes
+        // above it), so that the cache misses of a query overlap instead of following
+        // one another through the tests. Leaf position k holds entry k (see
         // `build_hierarchy`).
         let mut candidates: Vec<u32> = Vec::with_capacity(256);
         self.bvh.within(q.center, r2, |k| candidates.push(k as u32));
