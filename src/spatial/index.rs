@@ -556,7 +556,8 @@ impl Spatial {
         // Most candidates are hits: room for them all, made once.
         let mut hits = Hits::new(features, q.max_features, q.max_bodies, candidates.len());
         // Whether the query goes on after body `i`: not once the budget has run out.
-        let mut test = |i: usize| -> bool {
+        let test = |i: u32| -> bool {
+            let i = i as usize;
             if hits.full {
                 return false;
             }
@@ -576,7 +577,8 @@ impl Spatial {
                 return !hits.full;
             }
             let e = &self.entries[i];
-            if e.bounds.distance_squared(q.center) > r2 {
+            // At `features` detail the candidates kept are within the ball's reach.
+            if !features && e.bounds.distance_squared(q.center) > r2 {
                 return true;
             }
             let mut f = Features::default();
@@ -595,14 +597,7 @@ impl Spatial {
             }
             !hits.full
         };
-        for batch in candidates.chunks(READ_AHEAD_BODIES) {
-            if features {
-                self.read_ahead(batch);
-            }
-            if !batch.iter().all(|&i| test(i as usize)) {
-                break;
-            }
-        }
+        self.test_in_batches(&candidates, features, test);
         let tolerance = hits.tolerance;
         let bodies = hits.finish(Order::Distance, |i| self.name_of(i))?;
         Ok(SphereAnswer {
@@ -613,6 +608,20 @@ impl Spatial {
             tolerance: (q.detail == Detail::Portions).then(|| q.tolerance.max(tolerance)),
             bodies,
         })
+    }
+
+    /// Calls `test` on each of `candidates` (entry indices) in order until it answers
+    /// false (the query's budget has run out), [`READ_AHEAD_BODIES`] at a time; with
+    /// `read`, each batch is [read ahead](Spatial::read_ahead) before it is tested.
+    fn test_in_batches(&self, candidates: &[u32], read: bool, mut test: impl FnMut(u32) -> bool) {
+        for batch in candidates.chunks(READ_AHEAD_BODIES) {
+            if read {
+                self.read_ahead(batch);
+            }
+            if !batch.iter().all(|&i| test(i)) {
+                return;
+            }
+        }
     }
 
     /// Reads ahead what the tests of the bodies `candidates` (entry indices) will read of
@@ -650,7 +659,7 @@ impl Spatial {
         let features = q.detail != Detail::Bodies;
         let mut hits = Hits::new(features, q.max_features, q.max_bodies, candidates.len());
         // Whether the query goes on after body `i`: not once the budget has run out.
-        let mut test = |i: u32| -> bool {
+        let test = |i: u32| -> bool {
             let e = &self.entries[i as usize];
             let mut f = Features::default();
             if let Some(inside) = reach::aabb(
@@ -667,14 +676,7 @@ impl Spatial {
             }
             !hits.full
         };
-        for batch in candidates.chunks(READ_AHEAD_BODIES) {
-            if features {
-                self.read_ahead(batch);
-            }
-            if !batch.iter().all(|&i| test(i)) {
-                break;
-            }
-        }
+        self.test_in_batches(&candidates, features, test);
         let bodies = hits.finish(Order::Id, |i| self.name_of(i))?;
         Ok(BoxAnswer {
             revision: self.revision(),
