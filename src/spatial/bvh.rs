@@ -15,6 +15,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::aabb::Aabb;
+use super::prefetch::prefetch;
 
 /// Primitives per leaf, as a rule.
 const LEAF_MAX: usize = 4;
@@ -361,12 +362,26 @@ impl Bvh {
         self.walk(|n| n.overlaps(lo, hi), &mut visit);
     }
 
+    /// Prefetches the line of `node`'s children, when it is an inner node: a walk that
+    /// will go down into `node` later calls this when it decides to, so that the line
+    /// is on its way while the walk reads other nodes.
+    #[inline(always)]
+    fn prefetch_children(&self, node: &Node) {
+        if let Some(pair) = self.nodes.0.get(node.first as usize >> 1)
+            && !node.is_leaf()
+        {
+            prefetch(pair);
+        }
+    }
+
     /// Visits the leaf positions of the leaves reached through nodes `enter` accepts,
     /// until `visit` answers `false`.
     ///
     /// The walk is breadth first (see [`Frontier`]): every node of one level is read
     /// before any of the next so that, on a hierarchy out of cache, their misses overlap
     /// (a depth-first walk waits for each node's line before it can read the next).
+    /// Each node entered has its children's line prefetched as it joins the frontier,
+    /// a level before the walk reads it.
     fn walk(&self, mut enter: impl FnMut(&Node) -> bool, visit: &mut impl FnMut(usize) -> bool) {
         if self.nodes.is_empty() || !enter(&self.nodes[0]) {
             return;
@@ -384,7 +399,9 @@ impl Bvh {
                 continue;
             }
             for c in [n.first, n.first + 1] {
-                if enter(&self.nodes[c as usize]) {
+                let child = &self.nodes[c as usize];
+                if enter(child) {
+                    self.prefetch_children(child);
                     frontier.push(c);
                 }
             }
@@ -412,8 +429,10 @@ impl Bvh {
                 continue;
             }
             for c in [n.first, n.first + 1] {
-                let dc = self.nodes[c as usize].distance_squared(p);
+                let child = &self.nodes[c as usize];
+                let dc = child.distance_squared(p);
                 if dc <= best {
+                    self.prefetch_children(child);
                     heap.push(Near(dc, c));
                 }
             }

@@ -20,6 +20,7 @@ pub mod exact;
 mod hits;
 mod hull;
 pub mod index;
+mod prefetch;
 pub mod query;
 mod reach;
 pub mod shape;

@@ -143,15 +143,11 @@ pub fn ball(
             }
         }
     }
-    // The candidate faces are gathered first and touched in one tight loop of
-    // independent reads (`BodyShape::touch`), so that the cache misses of a query on a
-    // large shape overlap instead of following one another through the tests.
+    // The candidate faces are gathered first and tested with their records
+    // prefetched a few faces ahead (`BodyShape::visit_ahead`), so that the cache misses
+    // of a query on a large shape overlap the tests instead of stalling them.
     let mut candidates: Vec<u32> = Vec::with_capacity(shape.faces.len().min(256));
     shape.bvh.within(c, cull2, |k| candidates.push(k as u32));
-    let touched = candidates
-        .iter()
-        .fold(0, |acc, &k| acc ^ shape.touch(k as usize));
-    std::hint::black_box(touched);
     if features {
         // Most candidate faces meet the ball, with about as many edges as faces (each
         // edge reported by one of its two faces) and half as many vertices; when every
@@ -167,9 +163,7 @@ pub fn ball(
         out.vertices.reserve(vertices);
     }
     let mut nearest: Option<Closest> = None;
-    for &k in &candidates {
-        ball.test(k as usize, &mut sides, &mut nearest, out);
-    }
+    shape.visit_ahead(&candidates, |k| ball.test(k, &mut sides, &mut nearest, out));
     conclude(shape, c, nearest)
 }
 
@@ -396,21 +390,21 @@ pub fn aabb(
 ) -> Option<bool> {
     let features = detail != Detail::Bodies;
     let local = Aabb::new(lo, hi).transformed(inverse);
-    let mut met = false;
     let mut pts: Vec<DVec3> = Vec::new();
     let in_box = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
     let region = Aabb::new(lo, hi);
     // A matrix maps the corners faster than the quaternion.
     let world = pose.to_affine();
-    // At `bodies` detail the walk stops at the first face that meets the box.
-    shape.bvh.overlapping_until(local.min, local.max, |k| {
+    // Whether face `k` meets the box; at `features` detail and above, what it reports
+    // is appended to `out`.
+    let mut face = |k: usize| -> bool {
         let cs = shape.corners_of(k);
         pts.clear();
         pts.extend(shape.loop_points(k).map(|p| world.transform_point3(p)));
         // A face whose world bounds miss the box has no point in it (the hierarchy's
         // boxes are in the body's frame, so their leaves can reach past the box).
         if !Aabb::of_points(pts.iter().copied()).overlaps(&region) {
-            return true;
+            return false;
         }
         let mut meets = false;
         for (i, corner) in cs.iter().enumerate() {
@@ -427,9 +421,8 @@ pub fn aabb(
             (!meets || detail == Detail::Portions).then(|| clip_polygon_box(&pts, lo, hi));
         meets |= clipped.as_ref().is_some_and(|c| !c.is_empty());
         if !meets {
-            return true;
+            return false;
         }
-        met = true;
         if features {
             let portion = (detail == Detail::Portions).then(|| {
                 clipped
@@ -442,8 +435,27 @@ pub fn aabb(
                 portion,
             });
         }
-        features
-    });
+        true
+    };
+    let met = if features {
+        // Every face in the box is wanted: the candidates are gathered first and tested
+        // with their records prefetched ahead (see `ball`).
+        let mut candidates: Vec<u32> = Vec::with_capacity(shape.faces.len().min(256));
+        shape
+            .bvh
+            .overlapping(local.min, local.max, |k| candidates.push(k as u32));
+        let mut met = false;
+        shape.visit_ahead(&candidates, |k| met |= face(k));
+        met
+    } else {
+        // At `bodies` detail the walk stops at the first face that meets the box.
+        let mut met = false;
+        shape.bvh.overlapping_until(local.min, local.max, |k| {
+            met = face(k);
+            !met
+        });
+        met
+    };
     let centre = inverse.transform_point((lo + hi) * 0.5);
     let inside = shape.contains(centre);
     (met || inside).then_some(inside)

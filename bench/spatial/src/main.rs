@@ -752,7 +752,8 @@ fn terrain_shape(spatial: &Spatial) -> winged::spatial::shape::BodyShape {
 
 /// `profile-phases [hits]`: where a terrain query's wall time goes. Over the same
 /// centres, in turn and three times: the hierarchy's walk alone (the candidate faces
-/// gathered), the walk and the touch of every candidate's records, the whole query at
+/// gathered), the walk and a read of every candidate's loci (as the query reads them,
+/// prefetched ahead), the whole query at
 /// `bodies` and at `features` detail, and the box query of the ball's bounding box at
 /// each; each the mean over all centres, in µs.
 fn profile_phases(args: &[String]) {
@@ -781,10 +782,14 @@ fn profile_phases(args: &[String]) {
             shape.bvh.within(c, r2, |k| v.push(k as u32));
             v.len() as u64
         });
-        let touch = mean(&mut |c| {
+        let read = mean(&mut |c| {
             let mut v: Vec<u32> = Vec::with_capacity(256);
             shape.bvh.within(c, r2, |k| v.push(k as u32));
-            v.iter().fold(0, |a, &k| a ^ shape.touch(k as usize))
+            let mut acc = 0u64;
+            shape.visit_ahead(&v, |k| {
+                acc ^= shape.loop_points(k).fold(0, |a, p| a ^ p.x.to_bits());
+            });
+            acc
         });
         let spatial = &spatial;
         let whole = |detail: Detail| {
@@ -806,7 +811,7 @@ fn profile_phases(args: &[String]) {
         let box_bodies = mean(&mut boxed(Detail::Bodies));
         let box_features = mean(&mut boxed(Detail::Features));
         println!(
-            "round {round}: walk {walk:.2} µs, walk and touch {touch:.2} µs, \
+            "round {round}: walk {walk:.2} µs, walk and loci read {read:.2} µs, \
              query at bodies {bodies:.2} µs, at features {features:.2} µs; \
              its box at bodies {box_bodies:.2} µs, at features {box_features:.2} µs"
         );
