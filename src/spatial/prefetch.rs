@@ -31,3 +31,90 @@ fn line(at: *const u8) {
     #[cfg(not(target_arch = "x86_64"))]
     let _ = at;
 }
+
+/// Calls `visit(item)` for each of `items` in order until it answers `false`, with
+/// three stages of prefetching run ahead of it: `first` on the item `3 × ahead` further
+/// on, `second` on the one `2 × ahead` further on and `third` on the one `ahead` further
+/// on. Each stage may read what the stage before prefetched (a record, to find the
+/// lists it points to), which has then had `ahead` visits' time to arrive.
+///
+/// Postcondition: `visit` saw the items in order, each once, up to the first `false`;
+/// the stages change nothing a caller can see.
+#[inline(always)]
+pub fn staged<T: Copy>(
+    items: &[T],
+    ahead: usize,
+    first: impl Fn(T),
+    second: impl Fn(T),
+    third: impl Fn(T),
+    mut visit: impl FnMut(T) -> bool,
+) {
+    let at = |i: usize, stage: &dyn Fn(T)| {
+        if let Some(&item) = items.get(i) {
+            stage(item);
+        }
+    };
+    for i in 0..3 * ahead {
+        at(i, &first);
+    }
+    for i in 0..2 * ahead {
+        at(i, &second);
+    }
+    for i in 0..ahead {
+        at(i, &third);
+    }
+    for (i, &item) in items.iter().enumerate() {
+        at(i + 3 * ahead, &first);
+        at(i + 2 * ahead, &second);
+        at(i + ahead, &third);
+        if !visit(item) {
+            return;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `staged` visits the items in order up to the first refusal, and its stages each
+    /// see the items in order, the first the furthest ahead, never past the end.
+    #[test]
+    fn staged_visits_in_order_until_refused_with_its_stages_ahead() {
+        use std::cell::RefCell;
+        for len in [0usize, 1, 2, 5, 7, 30] {
+            for ahead in [0usize, 1, 2, 4] {
+                for stop in [None, Some(0), Some(3), Some(len.saturating_sub(1))] {
+                    let items: Vec<usize> = (0..len).collect();
+                    let log: RefCell<Vec<(usize, usize)>> = RefCell::new(Vec::new());
+                    let log = &log;
+                    let stage = |s: usize| move |i: usize| log.borrow_mut().push((s, i));
+                    let mut visited = Vec::new();
+                    staged(&items, ahead, stage(0), stage(1), stage(2), |i| {
+                        // Each stage has run on this item before it is visited.
+                        for s in 0..3 {
+                            assert!(log.borrow().contains(&(s, i)));
+                        }
+                        visited.push(i);
+                        Some(i) != stop
+                    });
+                    let end = stop.filter(|&s| s < len).map_or(len, |s| s + 1);
+                    assert_eq!(visited, (0..end).collect::<Vec<_>>());
+                    for s in 0..3 {
+                        let seen: Vec<usize> = log
+                            .borrow()
+                            .iter()
+                            .filter(|&&(t, _)| t == s)
+                            .map(|&(_, i)| i)
+                            .collect();
+                        let want: Vec<usize> = match end {
+                            0 => Vec::new(),
+                            _ => (0..=(end - 1 + (3 - s) * ahead).min(len - 1)).collect(),
+                        };
+                        assert_eq!(seen, want, "stage {s}, {len} items, {ahead} ahead");
+                    }
+                }
+            }
+        }
+    }
+}

@@ -17,7 +17,7 @@ use glam::DVec3;
 use super::aabb::Aabb;
 use super::bvh::Bvh;
 use super::exact::{SegmentFrom, boundary_margin, crosses, drop_axis, in_polygon};
-use super::prefetch::prefetch;
+use super::prefetch::{prefetch, staged};
 use rayon::prelude::*;
 
 use crate::model::{Body, EdgeUse, FaceId, Side};
@@ -415,26 +415,17 @@ impl BodyShape {
     /// Precondition: every index in `faces` is a face of the shape.
     #[inline(always)]
     pub fn visit_ahead(&self, faces: &[u32], mut visit: impl FnMut(usize)) {
-        let stage = |i: usize, f: fn(&BodyShape, usize)| {
-            if let Some(&k) = faces.get(i) {
-                f(self, k as usize);
-            }
-        };
-        for i in 0..3 * FACES_AHEAD {
-            stage(i, BodyShape::prefetch_face);
-        }
-        for i in 0..2 * FACES_AHEAD {
-            stage(i, BodyShape::prefetch_corners);
-        }
-        for i in 0..FACES_AHEAD {
-            stage(i, BodyShape::prefetch_loci);
-        }
-        for (i, &k) in faces.iter().enumerate() {
-            stage(i + 3 * FACES_AHEAD, BodyShape::prefetch_face);
-            stage(i + 2 * FACES_AHEAD, BodyShape::prefetch_corners);
-            stage(i + FACES_AHEAD, BodyShape::prefetch_loci);
-            visit(k as usize);
-        }
+        staged(
+            faces,
+            FACES_AHEAD,
+            |k| self.prefetch_face(k as usize),
+            |k| self.prefetch_corners(k as usize),
+            |k| self.prefetch_loci(k as usize),
+            |k| {
+                visit(k as usize);
+                true
+            },
+        );
     }
 
     /// Prefetches face `k`'s record (see [`prefetch`]): the first of the three stages
