@@ -12,7 +12,8 @@
 pub fn prefetch<T>(item: &T) {
     let first = std::ptr::from_ref(item).cast::<u8>();
     line(first);
-    if std::mem::size_of::<T>() > 1 {
+    // An item no larger than its alignment never straddles two lines.
+    if std::mem::size_of::<T>() > std::mem::align_of::<T>() {
         line(first.wrapping_add(std::mem::size_of::<T>() - 1));
     }
 }
@@ -49,27 +50,30 @@ pub fn staged<T: Copy>(
     third: impl Fn(T),
     mut visit: impl FnMut(T) -> bool,
 ) {
-    let at = |i: usize, stage: &dyn Fn(T)| {
-        if let Some(&item) = items.get(i) {
-            stage(item);
-        }
-    };
     for i in 0..3 * ahead {
-        at(i, &first);
+        at(items, i, &first);
     }
     for i in 0..2 * ahead {
-        at(i, &second);
+        at(items, i, &second);
     }
     for i in 0..ahead {
-        at(i, &third);
+        at(items, i, &third);
     }
     for (i, &item) in items.iter().enumerate() {
-        at(i + 3 * ahead, &first);
-        at(i + 2 * ahead, &second);
-        at(i + ahead, &third);
+        at(items, i + 3 * ahead, &first);
+        at(items, i + 2 * ahead, &second);
+        at(items, i + ahead, &third);
         if !visit(item) {
             return;
         }
+    }
+}
+
+/// Runs `stage` on `items[i]`, if there is one.
+#[inline(always)]
+fn at<T: Copy>(items: &[T], i: usize, stage: &impl Fn(T)) {
+    if let Some(&item) = items.get(i) {
+        stage(item);
     }
 }
 

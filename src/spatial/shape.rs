@@ -410,11 +410,17 @@ impl BodyShape {
     /// three stages: their records, then their corners (found through the records),
     /// then their loci and serial numbers (found through the corners). On a large
     /// shape out of cache each face's misses then overlap the tests of the faces before
-    /// it; a shape in cache pays a few prefetch instructions a face.
+    /// it. A shape of at most [`TOUCH_ALL_FACES`] faces is visited without prefetches:
+    /// queries read such shapes whole before they test them (see
+    /// [`BodyShape::touch_all`]).
     ///
     /// Precondition: every index in `faces` is a face of the shape.
     #[inline(always)]
     pub fn visit_ahead(&self, faces: &[u32], mut visit: impl FnMut(usize)) {
+        if self.faces.len() <= TOUCH_ALL_FACES {
+            faces.iter().for_each(|&k| visit(k as usize));
+            return;
+        }
         staged(
             faces,
             FACES_AHEAD,
