@@ -11,7 +11,7 @@
 //! Traversals are conservative: they visit every leaf whose box could meet the query
 //! (within rounding), and the caller runs the exact test on each primitive.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::aabb::Aabb;
@@ -229,12 +229,84 @@ impl Frontier {
     }
 }
 
-/// A primitive while building: its box and centroid.
+/// A box in `f32`, for the build: the primitives' boxes rounded outward, as the nodes
+/// hold them. Rounding outward commutes with the union, so a node's box made from these
+/// is the one the primitives' own boxes would give; the build's passes over the items
+/// move half the bytes they would in `f64`.
+#[derive(Clone, Copy, Debug)]
+struct Box32 {
+    min: Vec3,
+    max: Vec3,
+}
+
+impl Box32 {
+    const EMPTY: Box32 = Box32 {
+        min: Vec3::INFINITY,
+        max: Vec3::NEG_INFINITY,
+    };
+
+    /// `b` rounded outward (empty stays empty).
+    fn of(b: &Aabb) -> Box32 {
+        let (min, max) = b.to_f32_outward();
+        Box32 {
+            min: Vec3::from_array(min),
+            max: Vec3::from_array(max),
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    #[inline]
+    fn union(&self, o: &Box32) -> Box32 {
+        Box32 {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    #[inline]
+    fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// Half the surface area (0 when empty), in `f64`: the SAH weighs boxes by it.
+    #[inline]
+    fn half_area(&self) -> f64 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let d = (self.max - self.min).as_dvec3();
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+}
+
+/// A primitive while building: its box and centroid (40 bytes).
 #[derive(Clone, Copy)]
 struct Item {
-    bounds: Aabb,
-    centroid: DVec3,
+    bounds: Box32,
+    centroid: Vec3,
     index: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<Item>() == 40);
+
+impl Item {
+    /// Primitive `index`, of box `b`; an empty box is centred at the origin.
+    fn new(index: usize, b: &Aabb) -> Item {
+        let bounds = Box32::of(b);
+        Item {
+            bounds,
+            centroid: if bounds.is_empty() {
+                Vec3::ZERO
+            } else {
+                (bounds.min + bounds.max) * 0.5
+            },
+            index: index as u32,
+        }
+    }
 }
 
 impl Bvh {
@@ -251,18 +323,7 @@ impl Bvh {
         if n == 0 {
             return Bvh::default();
         }
-        let item = |i: usize| {
-            let b = box_of(i);
-            Item {
-                bounds: b,
-                centroid: if b.is_empty() {
-                    DVec3::ZERO
-                } else {
-                    b.center()
-                },
-                index: i as u32,
-            }
-        };
+        let item = |i: usize| Item::new(i, &box_of(i));
         let (mut items, span) = if n <= PARALLEL_MIN {
             let items: Vec<Item> = (0..n).map(item).collect();
             let span = Span::of(&items);
@@ -601,14 +662,14 @@ fn split(nodes: &mut Nodes, at: usize, items: &mut [Item], offset: usize, span: 
 /// The box over some items and the box over their centroids.
 #[derive(Clone, Copy, Debug)]
 struct Span {
-    bounds: Aabb,
-    centroids: Aabb,
+    bounds: Box32,
+    centroids: Box32,
 }
 
 impl Span {
     const EMPTY: Span = Span {
-        bounds: Aabb::EMPTY,
-        centroids: Aabb::EMPTY,
+        bounds: Box32::EMPTY,
+        centroids: Box32::EMPTY,
     };
 
     /// The span of `items`, by one pass over them.
@@ -650,7 +711,8 @@ fn divide(
         bounds,
         centroids: cbounds,
     } = span;
-    nodes[at].set_box(&bounds);
+    nodes[at].min = bounds.min.to_array();
+    nodes[at].max = bounds.max.to_array();
     let count = items.len() as u32;
     let leaf = |nodes: &mut Nodes| {
         nodes[at].first = offset as u32;
@@ -753,11 +815,11 @@ fn relocated(mut sub: Nodes, base: usize) -> Nodes {
 fn sah_split(
     items: &mut [Item],
     axis: usize,
-    cmin: f64,
-    extent: f64,
+    cmin: f32,
+    extent: f32,
 ) -> Option<(usize, Span, Span)> {
-    let scale = BINS as f64 / extent;
-    let bin_of = |c: f64| (((c - cmin) * scale) as usize).min(BINS - 1);
+    let scale = BINS as f32 / extent;
+    let bin_of = |c: f32| (((c - cmin) * scale) as usize).min(BINS - 1);
     let mut bins = [(Span::EMPTY, 0usize); BINS];
     for it in items.iter() {
         let b = &mut bins[bin_of(it.centroid[axis])];
@@ -766,13 +828,13 @@ fn sah_split(
     }
     // Sweep from the right, then from the left, to cost each of the BINS − 1 planes.
     let mut right_area = [0.0f64; BINS];
-    let mut acc = Aabb::EMPTY;
+    let mut acc = Box32::EMPTY;
     for i in (1..BINS).rev() {
         acc = acc.union(&bins[i].0.bounds);
         right_area[i] = acc.half_area();
     }
     let mut best: Option<(f32, usize)> = None;
-    let mut acc = Aabb::EMPTY;
+    let mut acc = Box32::EMPTY;
     let mut left_count = 0;
     for i in 0..BINS - 1 {
         acc = acc.union(&bins[i].0.bounds);
@@ -827,11 +889,7 @@ mod tests {
         let mut items: Vec<Item> = bs
             .iter()
             .enumerate()
-            .map(|(i, b)| Item {
-                bounds: *b,
-                centroid: b.center(),
-                index: i as u32,
-            })
+            .map(|(i, b)| Item::new(i, b))
             .collect();
         let mut nodes = Nodes::with_root(PAD, 0);
         let span = Span::of(&items);
