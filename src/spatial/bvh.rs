@@ -340,11 +340,18 @@ impl Bvh {
                 .reduce(|| Span::EMPTY, |a, b| a.union(&b));
             (items, span)
         };
-        let mut nodes = Nodes::with_root(PAD, 2 * n / LEAF_MAX + 2);
+        // A hierarchy has about 0.7 nodes per primitive (leaves of about three), at
+        // most two. A sequential build reserves one per primitive and gives back what
+        // it did not use; a parallel one makes its node list to size (see
+        // `split_parallel`).
+        let mut nodes = Nodes::with_root(PAD, if n <= PARALLEL_MIN { n + 2 } else { 0 });
         split_parallel(&mut nodes, 0, &mut items, 0, span);
+        nodes.0.shrink_to_fit();
+        // Collected from a borrow: collected from `items` itself, the order would reuse
+        // (and keep) the items' ten times larger buffer.
         Bvh {
             nodes,
-            order: items.into_iter().map(|it| it.index).collect(),
+            order: items.iter().map(|it| it.index).collect(),
         }
     }
 
@@ -776,7 +783,7 @@ fn split_parallel(nodes: &mut Nodes, at: usize, items: &mut [Item], offset: usiz
     let (left, right) = items.split_at_mut(mid);
     let blank = top[2];
     let build = |items: &mut [Item], offset: usize, span: Span| {
-        let mut sub = Nodes::with_root(blank, 2 * items.len() / LEAF_MAX + 2);
+        let mut sub = Nodes::with_root(blank, items.len() + 2);
         split_parallel(&mut sub, 0, items, offset, span);
         sub
     };
@@ -790,6 +797,7 @@ fn split_parallel(nodes: &mut Nodes, at: usize, items: &mut [Item], offset: usiz
     let r_base = l_base + l.len() - 2;
     let l = relocated(l, l_base);
     let r = relocated(r, r_base);
+    nodes.0.reserve_exact(l.0.len() + r.0.len() - 1);
     let first = nodes.push_pair(l.0[0].0[0], r.0[0].0[0]);
     nodes[at] = top[0];
     nodes[at].first = first as u32;
@@ -896,7 +904,7 @@ mod tests {
         split(&mut nodes, 0, &mut items, 0, span);
         Bvh {
             nodes,
-            order: items.into_iter().map(|it| it.index).collect(),
+            order: items.iter().map(|it| it.index).collect(),
         }
     }
 
@@ -927,6 +935,17 @@ mod tests {
                 let c = parallel.nodes[c];
                 assert!((0..3).all(|k| n.min[k] <= c.min[k] && c.max[k] <= n.max[k]));
             }
+        }
+    }
+
+    /// A built hierarchy holds what it needs and no build leftovers: one order entry per
+    /// primitive, and room for its nodes only, built on one thread or on several.
+    #[test]
+    fn a_built_hierarchy_keeps_no_build_leftovers() {
+        for n in [1, 7, 1000, 3 * PARALLEL_MIN] {
+            let bvh = Bvh::build(&boxes(n));
+            assert_eq!(bvh.order.capacity(), n, "{n} boxes");
+            assert_eq!(bvh.nodes.0.capacity(), bvh.nodes.0.len(), "{n} boxes");
         }
     }
 
