@@ -143,26 +143,34 @@ pub fn ball(
             }
         }
     }
-    // The candidate faces are gathered first and tested with their records
+    let mut nearest: Option<Closest> = None;
+    if shape.is_small() {
+        // A small shape's faces are tested as the walk finds them: its records are
+        // read whole before its tests (see `BodyShape::touch_all`). At `features`
+        // detail, room is made for all its features at once.
+        if features {
+            out.faces.reserve(shape.faces.len());
+            out.edges.reserve(shape.edge_serials.len());
+            out.vertices.reserve(shape.points.len());
+        }
+        shape
+            .bvh
+            .within(c, cull2, |k| ball.test(k, &mut sides, &mut nearest, out));
+        return conclude(shape, c, nearest);
+    }
+    // A large shape's candidate faces are gathered first and tested with their records
     // prefetched a few faces ahead (`BodyShape::visit_ahead`), so that the cache misses
     // of a query on a large shape overlap the tests instead of stalling them.
-    let mut candidates: Vec<u32> = Vec::with_capacity(shape.faces.len().min(256));
+    let mut candidates: Vec<u32> = Vec::with_capacity(256);
     shape.bvh.within(c, cull2, |k| candidates.push(k as u32));
     if features {
         // Most candidate faces meet the ball, with about as many edges as faces (each
-        // edge reported by one of its two faces) and half as many vertices; when every
-        // face is a candidate (a small body), as many as the body has.
+        // edge reported by one of its two faces) and half as many vertices.
         let n = candidates.len();
-        let (edges, vertices) = if n == shape.faces.len() {
-            (shape.edge_serials.len(), shape.points.len())
-        } else {
-            (n * 3 / 2, n / 2 + 1)
-        };
         out.faces.reserve(n);
-        out.edges.reserve(edges);
-        out.vertices.reserve(vertices);
+        out.edges.reserve(n * 3 / 2);
+        out.vertices.reserve(n / 2 + 1);
     }
-    let mut nearest: Option<Closest> = None;
     shape.visit_ahead(&candidates, |k| ball.test(k, &mut sides, &mut nearest, out));
     conclude(shape, c, nearest)
 }

@@ -410,14 +410,13 @@ impl BodyShape {
     /// three stages: their records, then their corners (found through the records),
     /// then their loci and serial numbers (found through the corners). On a large
     /// shape out of cache each face's misses then overlap the tests of the faces before
-    /// it. A shape of at most [`TOUCH_ALL_FACES`] faces is visited without prefetches:
-    /// queries read such shapes whole before they test them (see
-    /// [`BodyShape::touch_all`]).
+    /// it. A [small](BodyShape::is_small) shape is visited without prefetches: queries
+    /// read such shapes whole before they test them (see [`BodyShape::touch_all`]).
     ///
     /// Precondition: every index in `faces` is a face of the shape.
     #[inline(always)]
     pub fn visit_ahead(&self, faces: &[u32], mut visit: impl FnMut(usize)) {
-        if self.faces.len() <= TOUCH_ALL_FACES {
+        if self.is_small() {
             faces.iter().for_each(|&k| visit(k as usize));
             return;
         }
@@ -481,14 +480,21 @@ impl BodyShape {
             ^ self.size.to_bits()
     }
 
+    /// Whether the shape has at most [`TOUCH_ALL_FACES`] faces: few enough for queries
+    /// to read it whole before they test it (see [`BodyShape::touch_all`]).
+    #[inline]
+    pub fn is_small(&self) -> bool {
+        self.faces.len() <= TOUCH_ALL_FACES
+    }
+
     /// Reads a word of every cache line of the shape's records: its hierarchy's nodes,
-    /// faces, corners, loci and serial numbers, when it has at most
-    /// [`TOUCH_ALL_FACES`] faces (nothing otherwise). The answer means nothing; a
+    /// faces, corners, loci and serial numbers, when it is
+    /// [small](BodyShape::is_small) (nothing otherwise). The answer means nothing; a
     /// caller reads many small shapes so, one after another, for their cache misses to
     /// overlap before it tests them.
     #[inline]
     pub fn touch_all(&self) -> u64 {
-        if self.faces.len() > TOUCH_ALL_FACES {
+        if !self.is_small() {
             return 0;
         }
         self.bvh.touch()
