@@ -40,7 +40,8 @@ fn line(at: *const u8) {
 /// lists it points to), which has then had `ahead` visits' time to arrive.
 ///
 /// Postcondition: `visit` saw the items in order, each once, up to the first `false`;
-/// the stages change nothing a caller can see.
+/// every stage ran on each item before its visit, in order, and on no item more than
+/// `3 × ahead` past the last one visited.
 #[inline(always)]
 pub fn staged<T: Copy>(
     items: &[T],

@@ -952,6 +952,8 @@ mod tests {
     fn visit_ahead_visits_each_face_given_in_order() {
         let body = sphere(&mut Serials::new(), 1.0, 12, 7).expect("a sphere");
         let shape = BodyShape::build(Arc::new(body));
+        // Large enough for its faces to be prefetched ahead.
+        assert!(!shape.is_small());
         let n = shape.faces.len() as u32;
         let mut lists: Vec<Vec<u32>> = [0, 1, 2, FACES_AHEAD, 3 * FACES_AHEAD + 1, 40]
             .iter()
