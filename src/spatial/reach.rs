@@ -445,25 +445,27 @@ pub fn aabb(
         }
         true
     };
-    let met = if features {
-        // Every face in the box is wanted: the candidates are gathered first and tested
-        // with their records prefetched ahead (see `ball`).
-        let mut candidates: Vec<u32> = Vec::with_capacity(shape.faces.len().min(256));
-        shape
-            .bvh
-            .overlapping(local.min, local.max, |k| candidates.push(k as u32));
-        let mut met = false;
-        shape.visit_ahead(&candidates, |k| met |= face(k));
-        met
-    } else {
+    let mut met = false;
+    if !features {
         // At `bodies` detail the walk stops at the first face that meets the box.
-        let mut met = false;
         shape.bvh.overlapping_until(local.min, local.max, |k| {
             met = face(k);
             !met
         });
-        met
-    };
+    } else if shape.is_small() {
+        // Every face in the box is wanted. A small shape's are tested as the walk finds
+        // them, a large shape's gathered first and tested with their records prefetched
+        // ahead (as in `ball`).
+        shape
+            .bvh
+            .overlapping(local.min, local.max, |k| met |= face(k));
+    } else {
+        let mut candidates: Vec<u32> = Vec::with_capacity(256);
+        shape
+            .bvh
+            .overlapping(local.min, local.max, |k| candidates.push(k as u32));
+        shape.visit_ahead(&candidates, |k| met |= face(k));
+    }
     let centre = inverse.transform_point((lo + hi) * 0.5);
     let inside = shape.contains(centre);
     (met || inside).then_some(inside)

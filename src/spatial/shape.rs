@@ -410,16 +410,13 @@ impl BodyShape {
     /// three stages: their records, then their corners (found through the records),
     /// then their loci and serial numbers (found through the corners). On a large
     /// shape out of cache each face's misses then overlap the tests of the faces before
-    /// it. A [small](BodyShape::is_small) shape is visited without prefetches: queries
-    /// read such shapes whole before they test them (see [`BodyShape::touch_all`]).
+    /// it. (Queries test a [small](BodyShape::is_small) shape's faces as their walk
+    /// finds them instead: they read such shapes whole before their tests, see
+    /// [`BodyShape::touch_all`].)
     ///
     /// Precondition: every index in `faces` is a face of the shape.
     #[inline(always)]
     pub fn visit_ahead(&self, faces: &[u32], mut visit: impl FnMut(usize)) {
-        if self.is_small() {
-            faces.iter().for_each(|&k| visit(k as usize));
-            return;
-        }
         staged(
             faces,
             FACES_AHEAD,
