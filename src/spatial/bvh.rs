@@ -435,8 +435,8 @@ impl Bvh {
     /// is on its way while the walk reads other nodes.
     #[inline(always)]
     fn prefetch_children(&self, node: &Node) {
-        if let Some(pair) = self.nodes.0.get(node.first as usize >> 1)
-            && !node.is_leaf()
+        if !node.is_leaf()
+            && let Some(pair) = self.nodes.0.get(node.first as usize >> 1)
         {
             prefetch(pair);
         }

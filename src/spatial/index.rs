@@ -558,9 +558,6 @@ impl Spatial {
         // Whether the query goes on after body `i`: not once the budget has run out.
         let test = |i: u32| -> bool {
             let i = i as usize;
-            if hits.full {
-                return false;
-            }
             // A record settles most small convex bodies at `bodies` detail. It meets the
             // ball only when the body is nearer than the radius, so the bounds (looser)
             // need no test first.
