@@ -40,9 +40,17 @@ use glam::{DMat3, DQuat, DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::pose::{Pose, PoseError};
+use super::range::{self, RangeError};
 
 /// The largest image side, in pixels, that intrinsics may have.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// The largest focal length, and the farthest a principal point may lie from the
+/// image's corner on either axis, in pixels.
+pub const MAX_PIXELS: f64 = 1e9;
+
+/// The largest light intensity.
+pub const MAX_INTENSITY: f64 = 1e6;
 
 /// How far from orthonormal (largest entry of `RᵀR − I`) a rotation matrix may be.
 pub const ORTHONORMAL_TOL: f64 = 1e-6;
@@ -102,6 +110,24 @@ pub enum CameraError {
     /// look_at with an up vector that is zero or along the view direction.
     #[error("look_at: the up vector is zero or parallel to the view direction")]
     UpParallel,
+    /// A focal length or principal point beyond [`MAX_PIXELS`].
+    #[error("the camera's {what} is {value:e} pixels, beyond ±{MAX_PIXELS:e}")]
+    PixelsBeyond {
+        /// Which input.
+        what: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// The camera's position is outside the world's range.
+    #[error(transparent)]
+    OutOfRange(#[from] RangeError),
+}
+
+impl CameraError {
+    /// Whether the refusal is about the world's range (see [`crate::model::range`]).
+    pub fn is_out_of_range(&self) -> bool {
+        matches!(self, CameraError::OutOfRange(_))
+    }
 }
 
 /// A pinhole camera's pixel geometry. See the [module documentation](self) for the pixel
@@ -141,7 +167,8 @@ pub struct BaumgartRaster {
 
 impl Intrinsics {
     /// Checked intrinsics. Refused unless 1 ≤ width, height ≤ [`MAX_IMAGE_SIDE`], fx and
-    /// fy are finite and positive, and cx, cy are finite.
+    /// fy are finite, positive and at most [`MAX_PIXELS`], and cx, cy are finite and
+    /// within ±[`MAX_PIXELS`].
     pub fn new(
         width: u32,
         height: u32,
@@ -212,6 +239,16 @@ impl Intrinsics {
             return Err(CameraError::NonFinite {
                 what: "principal point",
             });
+        }
+        for (what, value) in [
+            ("focal length fx", self.fx),
+            ("focal length fy", self.fy),
+            ("principal point cx", self.cx),
+            ("principal point cy", self.cy),
+        ] {
+            if value.abs() > MAX_PIXELS {
+                return Err(CameraError::PixelsBeyond { what, value });
+            }
         }
         Ok(())
     }
@@ -299,10 +336,12 @@ pub struct Camera {
 }
 
 impl Camera {
-    /// A checked camera: the pose is validated (finite; quaternion renormalised, so the
-    /// rotation is orthonormal) and so are the intrinsics.
+    /// A checked camera: the pose is validated (finite, its position within the world's
+    /// range; quaternion renormalised, so the rotation is orthonormal) and so are the
+    /// intrinsics.
     pub fn new(pose: Pose, intrinsics: Intrinsics) -> Result<Camera, CameraError> {
         let pose = pose.validated()?;
+        range::coordinate("the camera's position", pose.position)?;
         intrinsics.validate()?;
         Ok(Camera { pose, intrinsics })
     }
@@ -364,10 +403,9 @@ impl Camera {
                 return Err(CameraError::NonFinite { what });
             }
         }
-        let k = (eye - target)
-            .try_normalize()
-            .ok_or(CameraError::EyeAtTarget)?;
-        let up = up.try_normalize().ok_or(CameraError::UpParallel)?;
+        let k = range::unit("the view direction", eye - target)
+            .map_err(|_| CameraError::EyeAtTarget)?;
+        let up = range::unit("up", up).map_err(|_| CameraError::UpParallel)?;
         let i = up.cross(k);
         if i.length() < 1e-9 {
             return Err(CameraError::UpParallel);
@@ -464,12 +502,22 @@ pub enum LightError {
     /// A sun direction of zero length.
     #[error("the sun's direction has zero length")]
     ZeroDirection,
-    /// A negative intensity.
-    #[error("light intensity {intensity} is negative")]
+    /// An intensity below zero or above [`MAX_INTENSITY`].
+    #[error("light intensity {intensity} is not between 0 and {MAX_INTENSITY}")]
     BadIntensity {
         /// The intensity given.
         intensity: f64,
     },
+    /// A point light outside the world's range.
+    #[error(transparent)]
+    OutOfRange(#[from] RangeError),
+}
+
+impl LightError {
+    /// Whether the refusal is about the world's range (see [`crate::model::range`]).
+    pub fn is_out_of_range(&self) -> bool {
+        matches!(self, LightError::OutOfRange(_))
+    }
 }
 
 /// A light source (Baumgart's SUN for SHADOW, and a point lamp).
@@ -518,14 +566,15 @@ impl Light {
         }
     }
 
-    /// This light checked (finite numbers, nonzero sun direction, intensity ≥ 0), with
-    /// the sun direction normalised.
+    /// This light checked (finite numbers, nonzero sun direction, intensity from 0 to
+    /// [`MAX_INTENSITY`], a point light's position within the world's range), with the
+    /// sun direction normalised.
     pub fn validated(&self) -> Result<Light, LightError> {
         let intensity = self.intensity();
         if !intensity.is_finite() {
             return Err(LightError::NonFinite { what: "intensity" });
         }
-        if intensity < 0.0 {
+        if !(0.0..=MAX_INTENSITY).contains(&intensity) {
             return Err(LightError::BadIntensity { intensity });
         }
         match *self {
@@ -533,16 +582,9 @@ impl Light {
                 if !direction.is_finite() {
                     return Err(LightError::NonFinite { what: "direction" });
                 }
-                let length = direction.length();
-                if length == 0.0 {
-                    return Err(LightError::ZeroDirection);
-                }
-                // Leave a unit vector's bits alone, so validating twice changes nothing.
-                let direction = if (length - 1.0).abs() <= 4.0 * f64::EPSILON {
-                    direction
-                } else {
-                    direction / length
-                };
+                // A unit vector keeps its bits, so validating twice changes nothing.
+                let direction = range::unit("the sun's direction", direction)
+                    .map_err(|_| LightError::ZeroDirection)?;
                 Ok(Light::Sun {
                     direction,
                     intensity,
@@ -552,6 +594,7 @@ impl Light {
                 if !position.is_finite() {
                     return Err(LightError::NonFinite { what: "position" });
                 }
+                range::coordinate("the light's position", position)?;
                 Ok(*self)
             }
         }

@@ -5,6 +5,7 @@
 //! while keeping F − E + V = 2(B − H); the validator ([`check`]) verifies every
 //! invariant; [`geometry`] derives planes, areas and volumes from the vertex loci;
 //! [`solids`] builds primitives; [`transform`] moves bodies, faces, edges and vertices;
+//! [`range`] states the numbers the model accepts;
 //! [`world`] holds the bodies in a parts tree ([`parts`], [`pose`]) with cameras and
 //! lights ([`camera`]) and a revision counter.
 
@@ -17,6 +18,7 @@ pub mod geometry;
 pub mod ids;
 pub mod parts;
 pub mod pose;
+pub mod range;
 pub mod solids;
 pub mod topology;
 pub mod transform;
@@ -30,6 +32,7 @@ pub use geometry::{Bounds, Plane};
 pub use ids::{EdgeId, FaceId, Serial, Serials, Side, VertexId};
 pub use parts::{BodyId, BodyNode, Color, Entity, PartsTree, Size};
 pub use pose::{Pose, PoseError};
+pub use range::RangeError;
 pub use topology::{Around, EdgeUse, Link};
 pub use transform::{Frame, Moves, Transform, TransformError};
 pub use world::{Killed, UngluedBodies, World, WorldError};

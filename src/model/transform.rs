@@ -27,6 +27,7 @@ use super::body::Body;
 use super::ids::{EdgeId, FaceId, VertexId};
 use super::parts::Entity;
 use super::pose::Pose;
+use super::range::{self, MAX_COORDINATE, MIN_LENGTH, RangeError};
 
 /// One of Baumgart's four Euclidean primitives, with its parameters (meters, radians).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -107,6 +108,17 @@ pub enum TransformError {
     /// Some transformed locus would overflow to infinity.
     #[error("the transformed loci would not be finite")]
     NonFiniteResult,
+    /// Some transformed locus would leave the world's range, or a dilation would shrink
+    /// what it moves below the smallest length (see [`crate::model::range`]).
+    #[error("the transformed loci would leave the world's range: {0}")]
+    OutOfRange(RangeError),
+}
+
+impl TransformError {
+    /// Whether the refusal is about the world's range (see [`crate::model::range`]).
+    pub fn is_out_of_range(&self) -> bool {
+        matches!(self, TransformError::OutOfRange(_))
+    }
 }
 
 fn finite(v: DVec3, what: &'static str) -> Result<(), TransformError> {
@@ -125,9 +137,10 @@ fn finite_scalar(x: f64, what: &'static str) -> Result<(), TransformError> {
     }
 }
 
+/// The unit vector along `v`, whatever its magnitude (see [`range::unit`]).
 fn unit(v: DVec3, what: &'static str, zero: TransformError) -> Result<DVec3, TransformError> {
     finite(v, what)?;
-    v.try_normalize().ok_or(zero)
+    range::unit(what, v).map_err(|_| zero)
 }
 
 impl Transform {
@@ -152,7 +165,7 @@ impl Transform {
                 let axis = unit(axis, "axis", TransformError::ZeroAxis)?;
                 finite_scalar(angle_rad, "angle")?;
                 finite(center, "center")?;
-                let q = DQuat::from_axis_angle(axis, angle_rad);
+                let q = DQuat::from_axis_angle(axis, angle_rad % std::f64::consts::TAU);
                 Ok(DAffine3::from_rotation_translation(q, center - q * center))
             }
             Transform::Dilate { factor, center } => {
@@ -222,7 +235,7 @@ impl Transform {
                 let axis = unit(axis, "axis", TransformError::ZeroAxis)?;
                 finite_scalar(angle_rad, "angle")?;
                 finite(center, "center")?;
-                let q = DQuat::from_axis_angle(axis, angle_rad);
+                let q = DQuat::from_axis_angle(axis, angle_rad % std::f64::consts::TAU);
                 Ok(Some(Pose {
                     position: center - q * center,
                     rotation: q,
@@ -272,8 +285,10 @@ impl Transform {
     /// caller decides whether that is wanted (`check_solid` reports it).
     ///
     /// Refused ([`TransformError`]) when a parameter is not finite, an axis or normal is
-    /// zero, a factor is not positive, the target is not live in `body`, or a new locus
-    /// would not be finite.
+    /// zero, a factor is not positive, the target is not live in `body`, a new locus
+    /// would not be finite or would leave the world's range, or a DILATE would shrink
+    /// the target's extent (the largest side of its loci's bounding box) below
+    /// [`MIN_LENGTH`] (see [`crate::model::range`]).
     pub fn plan(
         &self,
         body: &Body,
@@ -312,6 +327,27 @@ impl Transform {
         if moves.iter().any(|(_, p)| !p.is_finite()) {
             return Err(TransformError::NonFiniteResult);
         }
+        if let Some(&(_, p)) = moves
+            .iter()
+            .find(|(_, p)| !range::is_within(*p, MAX_COORDINATE))
+        {
+            return Err(TransformError::OutOfRange(
+                range::coordinate("a transformed locus", p)
+                    .expect_err("the locus is beyond the range"),
+            ));
+        }
+        if let Transform::Dilate { factor, .. } = *self
+            && factor < 1.0
+        {
+            let before = extent(moves.iter().map(|&(v, _)| body.position(v)));
+            let after = extent(moves.iter().map(|&(_, p)| p));
+            if after < MIN_LENGTH && after < before {
+                return Err(TransformError::OutOfRange(RangeError::TooSmall {
+                    what: "the dilated extent",
+                    value: after,
+                }));
+            }
+        }
         Ok(Moves {
             moves,
             evert: target == Entity::Body && self.reverses_orientation(),
@@ -333,6 +369,21 @@ impl Transform {
     ) -> Result<(), TransformError> {
         self.plan(body, target, frame, body_pose)?.apply(body);
         Ok(())
+    }
+}
+
+/// The largest side of the bounding box of `points` (0 for none).
+fn extent(points: impl Iterator<Item = DVec3>) -> f64 {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for p in points {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    if lo.x > hi.x {
+        0.0
+    } else {
+        (hi - lo).max_element()
     }
 }
 

@@ -42,6 +42,7 @@ use super::euler::EulerError;
 use super::ids::{EdgeId, FaceId, Serial, Serials, VertexId};
 use super::parts::{BodyId, BodyNode, Color, Entity, PartsTree, Size, validate_name};
 use super::pose::{Pose, PoseError};
+use super::range::{self, MAX_COORDINATE, RangeError};
 use super::solids::BuildError;
 use super::transform::{Frame, Transform, TransformError};
 
@@ -124,6 +125,36 @@ pub enum WorldError {
         /// What.
         what: &'static str,
     },
+    /// A locus or size outside the world's range (see [`crate::model::range`]).
+    #[error(transparent)]
+    OutOfRange(#[from] RangeError),
+    /// The write would place a body's origin outside the world's range.
+    #[error(
+        "body {body} would have its origin at a world coordinate of {value:e} m, beyond the range of ±{MAX_COORDINATE:e} m"
+    )]
+    Placement {
+        /// The body.
+        body: BodyId,
+        /// Its coordinate farthest from zero.
+        value: f64,
+    },
+}
+
+impl WorldError {
+    /// Whether the refusal is about the world's range (see [`crate::model::range`]): a
+    /// locus, a placement or a size the world does not take.
+    pub fn is_out_of_range(&self) -> bool {
+        match self {
+            WorldError::OutOfRange(_) | WorldError::Placement { .. } => true,
+            WorldError::Euler(e) => e.is_out_of_range(),
+            WorldError::Transform(e) => e.is_out_of_range(),
+            WorldError::Camera(e) => e.is_out_of_range(),
+            WorldError::Light(e) => e.is_out_of_range(),
+            WorldError::Build(e) => e.is_out_of_range(),
+            WorldError::Solid(e) => e.is_out_of_range(),
+            _ => false,
+        }
+    }
 }
 
 /// What [`World::kill`] removed: the body and all its sub-parts, in pre-order (the killed
@@ -425,13 +456,14 @@ impl World {
     /// its world locus. Serials are taken for the body, the face and the vertex, in that
     /// order. Inverse: [`World::kill`].
     ///
-    /// Refused when `pos` is not finite.
+    /// Refused when `pos` is not finite or beyond the world's range.
     pub fn mkbfv(&mut self, pos: DVec3) -> Result<(BodyId, FaceId, VertexId), WorldError> {
         if !pos.is_finite() {
             return Err(WorldError::NonFinite {
                 what: "the vertex locus",
             });
         }
+        range::coordinate("the vertex locus", pos)?;
         let id = BodyId(self.serials.take());
         let (body, f, v) = Body::seminal(&mut self.serials, pos);
         self.tree
@@ -450,7 +482,8 @@ impl World {
     /// [`World::insert_with`] instead.
     ///
     /// Refused when `supart` is unknown, the name is bad or taken, the pose is not
-    /// finite, the body fails [`check_topology`], or a locus is not finite.
+    /// finite or would place the body beyond the world's range, the body fails
+    /// [`check_topology`], or a locus is not finite or beyond the range.
     /// Inverse: [`World::kill`].
     pub fn insert(
         &mut self,
@@ -528,7 +561,48 @@ impl World {
     ) -> Result<(Option<String>, Pose), WorldError> {
         self.live(supart)?;
         let name = name.map(|n| self.free_name(n, None)).transpose()?;
-        Ok((name, pose.validated()?))
+        let pose = pose.validated()?;
+        let origin = self
+            .tree
+            .world_pose(supart)
+            .expect("supart is live")
+            .compose(&pose)
+            .position;
+        if !range::is_within(origin, MAX_COORDINATE) {
+            return Err(WorldError::Placement {
+                body: BodyId(self.serials.peek()),
+                value: range::reach(origin),
+            });
+        }
+        Ok((name, pose))
+    }
+
+    /// Checks that giving body `b` the pose `pose` relative to `supart` keeps the
+    /// origins of `b` and of all its parts, at any depth, within the world's range.
+    /// Preconditions: `b` and `supart` are live, `b` is not the root. Linear in the size
+    /// of `b`'s subtree.
+    fn check_placement(&self, b: BodyId, supart: BodyId, pose: &Pose) -> Result<(), WorldError> {
+        let top = self
+            .tree
+            .world_pose(supart)
+            .expect("supart is live")
+            .compose(pose);
+        let mut stack = vec![(b, top)];
+        while let Some((x, w)) = stack.pop() {
+            if !range::is_within(w.position, MAX_COORDINATE) {
+                return Err(WorldError::Placement {
+                    body: x,
+                    value: range::reach(w.position),
+                });
+            }
+            if let Some(parts) = self.tree.parts(x) {
+                for &p in parts {
+                    let node = self.tree.get(p).expect("a part is live");
+                    stack.push((p, w.compose(&node.pose)));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// ATTACH(b, supart): DETs `b` (with all its parts) from its supart and ATTs it to
@@ -568,10 +642,13 @@ impl World {
     }
 
     /// Sets `b`'s pose relative to its supart (renormalising the quaternion); its parts
-    /// move with it. Refused for the root, an unknown body or a bad pose.
+    /// move with it. Refused for the root, an unknown body, a bad pose, or one that
+    /// would place `b` or a part of it beyond the world's range.
     pub fn set_pose(&mut self, b: BodyId, pose: Pose) -> Result<(), WorldError> {
         self.live_part(b, "posed")?;
         let pose = pose.validated()?;
+        let supart = self.tree.supart(b).expect("checked");
+        self.check_placement(b, supart, &pose)?;
         self.tree.get_mut(b).expect("checked").pose = pose;
         self.written();
         Ok(())
@@ -622,7 +699,13 @@ impl World {
         let pose = match pose {
             Some(pose) => {
                 self.live_part(b, "posed")?;
-                Some(pose.validated()?)
+                let pose = pose.validated()?;
+                let under = match supart {
+                    Some(s) => s,
+                    None => self.tree.supart(b).expect("checked"),
+                };
+                self.check_placement(b, under, &pose)?;
+                Some(pose)
             }
             None => None,
         };
@@ -667,7 +750,8 @@ impl World {
     /// anything). For a sequence of operators that may fail half-way, use
     /// [`World::transaction`].
     ///
-    /// `op` must leave a valid body (Euler operators do); a body split in two by UNGLUE
+    /// `op` must leave a valid body with every locus in the world's range (the Euler
+    /// operators and sweeps refuse loci beyond it); a body split in two by UNGLUE
     /// inside `op` would be lost with its serials, so use [`World::unglue`] for that, and
     /// [`World::glue`] and its kin for gluing two bodies.
     ///
@@ -689,6 +773,11 @@ impl World {
             "edit left an invalid body: {}",
             check_topology(body)
         );
+        debug_assert!(
+            check_loci(body).is_ok(),
+            "edit left a locus out of range: {:?}",
+            check_loci(body)
+        );
         drop(node);
         self.written();
         Ok(r)
@@ -697,12 +786,13 @@ impl World {
     /// Applies `op`, any sequence of kernel operations, to body `b` as one transaction.
     ///
     /// `op` works on a private copy of the body and of the serial counter, which replace
-    /// the originals only if it succeeds and leaves every locus finite; if it fails (even
+    /// the originals only if it succeeds and leaves every locus finite and in range; if it
+    /// fails (even
     /// half-way through a sequence), the world is unchanged. The copy costs one clone of
     /// the body. The same cautions as for [`World::edit`] apply to UNGLUE and GLUE.
     ///
     /// Refused for the root, an unknown body, `op`'s own error, or a locus left
-    /// non-finite.
+    /// non-finite or beyond the world's range.
     pub fn transaction<R, E>(
         &mut self,
         b: BodyId,
@@ -715,11 +805,7 @@ impl World {
         let mut body = Body::clone(&node.body);
         let mut serials = self.serials.clone();
         let r = op(&mut body, &mut serials)?;
-        if body.vertices().any(|v| !body.position(v).is_finite()) {
-            return Err(WorldError::NonFinite {
-                what: "a vertex locus",
-            });
-        }
+        check_loci(&body)?;
         debug_assert!(
             check_topology(&body).is_ok(),
             "transaction left an invalid body: {}",
@@ -747,7 +833,8 @@ impl World {
     /// Inverse: the same call with [`Transform::inverse`].
     ///
     /// Refused for the root, an unknown body, bad parameters, an entity that is not live
-    /// in `b`, or a result that would not be finite.
+    /// in `b`, or a result that would not be finite or would leave the world's range (a
+    /// locus, or the origin of `b` or of one of its parts: see [`crate::model::range`]).
     pub fn transform(
         &mut self,
         b: BodyId,
@@ -770,6 +857,7 @@ impl World {
             if !pose.is_finite() {
                 return Err(TransformError::NonFiniteResult.into());
             }
+            self.check_placement(b, node.supart, &pose)?;
             self.tree.get_mut(b).expect("checked").pose = pose;
         } else {
             let w = self.tree.world_pose(b).expect("b is live");
@@ -919,6 +1007,7 @@ impl World {
             let p = to_a.transform_point(other.position(v));
             other.set_position(v, p);
         }
+        check_loci(&other)?;
         let mut serials = self.serials.clone();
         let mut node = self.tree.get_mut(a).expect("checked");
         let r = cow_try(&mut node.body, |body| op(body, &mut other, &mut serials))?;
@@ -997,10 +1086,21 @@ fn check_geometry_input(body: &Body) -> Result<(), WorldError> {
     if !report.is_ok() {
         return Err(WorldError::InvalidBody(report));
     }
-    if body.vertices().any(|v| !body.position(v).is_finite()) {
-        return Err(WorldError::NonFinite {
-            what: "a vertex locus",
-        });
+    check_loci(body)
+}
+
+/// Checks that every locus of `body` is finite and within the world's range.
+fn check_loci(body: &Body) -> Result<(), WorldError> {
+    for v in body.vertices() {
+        let p = body.position(v);
+        if !p.is_finite() {
+            return Err(WorldError::NonFinite {
+                what: "a vertex locus",
+            });
+        }
+        if !range::is_within(p, MAX_COORDINATE) {
+            range::coordinate("a vertex locus", p)?;
+        }
     }
     Ok(())
 }

@@ -14,6 +14,7 @@ use super::dto::{
     CameraReq, CameraReqError, CreateBody, EulerOp, FrameDto, LightDto, PatchBody, Shape,
     SweepKind, SweepReq, TransformOp, TransformReq, points2,
 };
+use crate::model::range;
 use crate::model::solids::{
     BuildError, SolidError, Twist, box_solid, cone, cylinder, mktetra, prism_solid, pyramid_solid,
     sphere, torus,
@@ -213,6 +214,19 @@ pub enum EditError {
     BadNumber(String),
 }
 
+impl EditError {
+    /// Whether the refusal is about the world's range (see [`crate::model::range`]).
+    pub fn is_out_of_range(&self) -> bool {
+        match self {
+            EditError::World(e) => e.is_out_of_range(),
+            EditError::Solid(e) => e.is_out_of_range(),
+            EditError::Camera(CameraReqError::Camera(e)) => e.is_out_of_range(),
+            EditError::Light(e) => e.is_out_of_range(),
+            _ => false,
+        }
+    }
+}
+
 impl From<EulerError> for EditError {
     fn from(e: EulerError) -> Self {
         EditError::World(WorldError::Euler(e))
@@ -323,6 +337,7 @@ fn build(shape: &Shape, s: &mut crate::model::Serials) -> Result<Body, EditError
                 }
                 .into());
             }
+            range::length("radius", *radius).map_err(SolidError::from)?;
             mktetra(s, *radius)?
         }
         Shape::Prism { polygon, height } => prism_solid(s, &points2(polygon), *height)?,

@@ -188,9 +188,17 @@ impl From<QueryRejection> for Problem {
     }
 }
 
+/// 422 `out-of-range`: the write would take the world outside its range.
+fn out_of_range(detail: String) -> Problem {
+    unprocessable("out-of-range", "Outside the world's range", detail)
+}
+
 impl From<EditError> for Problem {
     fn from(e: EditError) -> Self {
         let detail = e.to_string();
+        if e.is_out_of_range() {
+            return out_of_range(detail);
+        }
         match e {
             EditError::World(w) => world_problem(w, detail),
             EditError::Unknown { .. } | EditError::NotInBody { .. } => Problem::not_found(detail),
@@ -234,6 +242,7 @@ fn world_problem(w: WorldError, detail: String) -> Problem {
         WorldError::BadName { .. } | WorldError::Pose(_) | WorldError::NonFinite { .. } => {
             Problem::bad_request(detail)
         }
+        WorldError::OutOfRange(_) | WorldError::Placement { .. } => out_of_range(detail),
     }
 }
 

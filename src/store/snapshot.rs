@@ -28,6 +28,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::model::parts::validate_name;
+use crate::model::range::{self, MAX_COORDINATE};
 use crate::model::{Serial, World, check_topology};
 
 use super::error::StoreError;
@@ -320,8 +321,13 @@ fn decode_payload(
 
 /// Checks a world read from outside against the invariants every [`World`] keeps: a
 /// sound parts tree with an empty root, every body a valid winged-edge polyhedron with
-/// finite loci, every serial in use issued by the world's counter (so none is issued
-/// twice), and valid camera and light names and values. Returns the first problem.
+/// finite loci in the world's range and its origin in range (see
+/// [`crate::model::range`]), every serial in use issued by the world's counter (so
+/// none is issued twice), and valid camera and light names and values (which includes
+/// their range). Returns the first problem.
+///
+/// These are the rules every write of the world keeps, so a world the server accepted
+/// passes them; the snapshot writer checks them before a snapshot replaces an older one.
 pub fn check_world(world: &World) -> Result<(), String> {
     let tree = world.tree();
     if let Some(p) = tree.check().into_iter().next() {
@@ -354,8 +360,27 @@ pub fn check_world(world: &World) -> Result<(), String> {
         if !report.is_ok() {
             return Err(format!("body {id}: {report}"));
         }
-        if b.vertices().any(|v| !b.position(v).is_finite()) {
-            return Err(format!("body {id}: a vertex locus is not finite"));
+        if let Some(v) = b.vertices().find(|&v| !b.position(v).is_finite()) {
+            return Err(format!(
+                "body {id}: the locus of vertex {} is not finite",
+                b.vertex_serial(v)
+            ));
+        }
+        if let Some(v) = b
+            .vertices()
+            .find(|&v| !range::is_within(b.position(v), MAX_COORDINATE))
+        {
+            return Err(format!(
+                "body {id}: the locus of vertex {} is {}, beyond the range of ±{MAX_COORDINATE:e} m",
+                b.vertex_serial(v),
+                b.position(v)
+            ));
+        }
+        let origin = world.world_pose_of(id, node).position;
+        if id != root && !range::is_within(origin, MAX_COORDINATE) {
+            return Err(format!(
+                "body {id}: its origin is at {origin}, beyond the range of ±{MAX_COORDINATE:e} m"
+            ));
         }
     }
     for (name, camera) in world.cameras() {

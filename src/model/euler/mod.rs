@@ -162,6 +162,9 @@ pub enum EulerError {
         /// z coordinate.
         z: f64,
     },
+    /// A locus beyond the world's range (see [`crate::model::range`]).
+    #[error(transparent)]
+    OutOfRange(#[from] crate::model::range::RangeError),
     /// The seam for UNGLUE is not one simple closed loop of edges.
     #[error("the seam is not one simple closed loop of edges: {reason}")]
     BadSeam {
@@ -170,17 +173,26 @@ pub enum EulerError {
     },
 }
 
+impl EulerError {
+    /// Whether the refusal is about the world's range (see [`crate::model::range`]).
+    pub fn is_out_of_range(&self) -> bool {
+        matches!(self, EulerError::OutOfRange(_))
+    }
+}
+
 impl Body {
+    /// Checks a new locus: finite ([`EulerError::NonFiniteLocus`]) and within the
+    /// world's range ([`EulerError::OutOfRange`], see [`crate::model::range`]).
     pub(crate) fn check_locus(p: glam::DVec3) -> Result<(), EulerError> {
-        if p.is_finite() {
-            Ok(())
-        } else {
-            Err(EulerError::NonFiniteLocus {
+        if !p.is_finite() {
+            return Err(EulerError::NonFiniteLocus {
                 x: p.x,
                 y: p.y,
                 z: p.z,
-            })
+            });
         }
+        crate::model::range::coordinate("the locus", p)?;
+        Ok(())
     }
     pub(crate) fn check_face(&self, f: FaceId) -> Result<(), EulerError> {
         if self.has_face(f) {

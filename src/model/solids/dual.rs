@@ -59,7 +59,9 @@ impl Body {
     /// Preconditions (refused otherwise, before any change): no edge has the same face
     /// on both sides (a wire or a spur, whose dual would be a loop); for
     /// [`DualLocus::Polar`], a finite centre and positive radius, every face of non-zero
-    /// area with the centre strictly inside its plane.
+    /// area with the centre strictly inside its plane, every pole within the world's
+    /// range. Face centres lie within the bounding box of the body's loci, so the dual
+    /// at [`DualLocus::FaceCenter`] of a body in range is in range.
     ///
     /// A seminal body (one face, one vertex, no edges) keeps its vertex locus.
     pub fn fvdual_with(&mut self, locus: DualLocus) -> Result<(), SolidError> {
@@ -102,6 +104,7 @@ impl Body {
                                 distance: d,
                             });
                         }
+                        crate::model::range::coordinate("a polar dual vertex", p)?;
                         loci.push(p);
                     }
                     loci

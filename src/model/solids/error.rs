@@ -2,6 +2,7 @@
 
 use crate::model::euler::EulerError;
 use crate::model::ids::Serial;
+use crate::model::range::{self, RangeError};
 
 use super::polyhedron::BuildError;
 
@@ -27,6 +28,9 @@ pub enum SolidError {
         /// Which parameter.
         parameter: &'static str,
     },
+    /// A size or a new locus outside the world's range (see [`crate::model::range`]).
+    #[error(transparent)]
+    OutOfRange(#[from] RangeError),
     /// A length, radius or scale that must be above zero.
     #[error("{parameter} must be above zero, not {value}")]
     NotPositive {
@@ -123,6 +127,18 @@ pub enum SolidError {
     },
 }
 
+impl SolidError {
+    /// Whether the refusal is about the world's range (see [`crate::model::range`]).
+    pub fn is_out_of_range(&self) -> bool {
+        match self {
+            SolidError::OutOfRange(_) => true,
+            SolidError::Euler(e) => e.is_out_of_range(),
+            SolidError::Build(e) => e.is_out_of_range(),
+            _ => false,
+        }
+    }
+}
+
 /// What is wrong with a polygon or a rotation profile.
 ///
 /// A polygon's segment `k` runs from point `k` to point `k + 1` (the last one back to
@@ -210,6 +226,13 @@ pub(crate) fn positive(parameter: &'static str, value: f64) -> Result<f64, Solid
     } else {
         Err(SolidError::NotPositive { parameter, value })
     }
+}
+
+/// `value`, if it is a length above zero within the world's range: at least
+/// [`range::MIN_LENGTH`] and at most [`range::MAX_LENGTH`].
+pub(crate) fn length(parameter: &'static str, value: f64) -> Result<f64, SolidError> {
+    positive(parameter, value)?;
+    Ok(range::length(parameter, value)?)
 }
 
 /// `value`, if it is at least `min`.

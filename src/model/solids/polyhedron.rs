@@ -111,6 +111,22 @@ pub enum BuildError {
         /// What overflowed.
         what: &'static str,
     },
+    /// The vertices span less than the smallest length (see [`crate::model::range`]).
+    #[error(
+        "the polyhedron is {extent:e} m across, below the smallest length of {min:e} m",
+        min = crate::model::range::MIN_LENGTH
+    )]
+    TooSmall {
+        /// The largest side of the vertices' bounding box.
+        extent: f64,
+    },
+}
+
+impl BuildError {
+    /// Whether the refusal is about the world's range (see [`crate::model::range`]).
+    pub fn is_out_of_range(&self) -> bool {
+        matches!(self, BuildError::TooSmall { .. })
+    }
 }
 
 impl Body {
@@ -125,7 +141,9 @@ impl Body {
     /// sign of the volume.
     ///
     /// Refused with a [`BuildError`] (and no serials taken) for open, non-manifold,
-    /// inconsistently oriented, disconnected or inward input, or bad indices or numbers.
+    /// inconsistently oriented, disconnected or inward input, bad indices or numbers, or
+    /// vertices that span less than [`crate::model::range::MIN_LENGTH`]. (Loci beyond the
+    /// world's range are refused when the body enters a world.)
     pub fn from_polygons<F: AsRef<[u32]>>(
         serials: &mut Serials,
         positions: &[DVec3],
@@ -339,6 +357,16 @@ impl Plan {
         if six_vol < 0.0 {
             return Err(BuildError::Inward {
                 volume: six_vol / 6.0,
+            });
+        }
+        let (lo, hi) = positions.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        let extent = (hi - lo).max_element();
+        if nv > 0 && extent < crate::model::range::MIN_LENGTH {
+            return Err(BuildError::TooSmall {
+                extent: extent.max(0.0),
             });
         }
         Ok(Plan {

@@ -19,7 +19,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::error::{PolygonFault, SolidError, at_least, positive};
+use super::error::{PolygonFault, SolidError, at_least, length};
 use super::sweep::{MAX_POLYGON_POINTS, simple_polygon};
 use crate::model::body::Body;
 use crate::model::ids::Serials;
@@ -177,16 +177,17 @@ fn layout(pts: &[DVec2], n: usize, closed: bool) -> (Vec<DVec3>, Vec<Vec<u32>>) 
 /// a regular `segments`-gon inscribed in the circle, with one vertex on +x. F = n + 2,
 /// E = 3n, V = 2n; volume `n/2·r²·sin(2π/n)·h`.
 ///
-/// Preconditions: `radius`, `height` finite and above zero; `3 ≤ segments`, and at
-/// most [`MAX_SWEEP_FACES`] faces.
+/// Preconditions: `radius`, `height` lengths in the world's range (finite, at least
+/// [`crate::model::range::MIN_LENGTH`], at most [`crate::model::range::MAX_LENGTH`]);
+/// `3 ≤ segments`, and at most [`MAX_SWEEP_FACES`] faces.
 pub fn cylinder(
     serials: &mut Serials,
     radius: f64,
     height: f64,
     segments: usize,
 ) -> Result<Body, SolidError> {
-    let r = positive("radius", radius)?;
-    let h = positive("height", height)? / 2.0;
+    let r = length("radius", radius)?;
+    let h = length("height", height)? / 2.0;
     rotation_sweep(
         serials,
         &[DVec2::new(r, -h), DVec2::new(r, h)],
@@ -206,8 +207,8 @@ pub fn cone(
     height: f64,
     segments: usize,
 ) -> Result<Body, SolidError> {
-    let r = positive("radius", radius)?;
-    let h = positive("height", height)? / 2.0;
+    let r = length("radius", radius)?;
+    let h = length("height", height)? / 2.0;
     rotation_sweep(
         serials,
         &[DVec2::new(r, -h), DVec2::new(0.0, h)],
@@ -221,7 +222,7 @@ pub fn cone(
 /// latitude, evenly spaced in angle, and triangle fans at the poles).
 /// F = n·rings, E = n·(2·rings − 1), V = n·(rings − 1) + 2.
 ///
-/// Preconditions: `radius` finite and above zero; `segments ≥ 3`, `rings ≥ 2`;
+/// Preconditions: `radius` a length in the world's range; `segments ≥ 3`, `rings ≥ 2`;
 /// `rings < MAX_POLYGON_POINTS`; at most [`MAX_SWEEP_FACES`] faces.
 pub fn sphere(
     serials: &mut Serials,
@@ -229,7 +230,7 @@ pub fn sphere(
     segments: usize,
     rings: usize,
 ) -> Result<Body, SolidError> {
-    let r = positive("radius", radius)?;
+    let r = length("radius", radius)?;
     at_least("segments", segments, 3)?;
     at_least("rings", rings, 2)?;
     check_grid(segments, rings, rings + 1)?;
@@ -250,7 +251,7 @@ pub fn sphere(
 /// `segments` steps around the axis. F = n·rings, E = 2·n·rings, V = n·rings, one
 /// handle.
 ///
-/// Preconditions: radii finite and above zero, `minor_radius < major_radius`;
+/// Preconditions: radii lengths in the world's range, `minor_radius < major_radius`;
 /// `segments ≥ 3`, `rings ≥ 3`, `rings ≤ MAX_POLYGON_POINTS`; at most
 /// [`MAX_SWEEP_FACES`] faces.
 pub fn torus(
@@ -260,8 +261,8 @@ pub fn torus(
     segments: usize,
     rings: usize,
 ) -> Result<Body, SolidError> {
-    let major = positive("major_radius", major_radius)?;
-    let minor = positive("minor_radius", minor_radius)?;
+    let major = length("major_radius", major_radius)?;
+    let minor = length("minor_radius", minor_radius)?;
     if minor >= major {
         return Err(SolidError::MinorNotBelowMajor { minor, major });
     }

@@ -26,11 +26,12 @@
 use glam::{DQuat, DVec2, DVec3};
 
 use super::cube::mkcube;
-use super::error::{PolygonFault, SolidError, finite, positive};
+use super::error::{PolygonFault, SolidError, finite, length, positive};
 use crate::model::body::Body;
 use crate::model::euler::EulerError;
 use crate::model::geometry::Plane;
 use crate::model::ids::{FaceId, Serials, VertexId};
+use crate::model::range::{self, MAX_COORDINATE, MIN_LENGTH, RangeError};
 
 /// The most points a polygon or a rotation profile may have: simplicity is checked by
 /// testing every pair of segments.
@@ -90,7 +91,8 @@ impl Body {
     ///
     /// Preconditions (refused otherwise, before any change): `f` is live, a simple
     /// polygon (no spurs, no vertex twice) of at least three edges, of non-zero area;
-    /// `peak` is finite and strictly above `f`'s plane (on its outer side).
+    /// `peak` is finite, within the world's range and at least
+    /// [`range::MIN_LENGTH`] above `f`'s plane (on its outer side).
     ///
     /// Postconditions: F + n − 1, E + n, V + 1 for an `n`-edged face. The triangles are
     /// `peak vi−1 vi`; `f` survives as the last one, `peak vn−1 v0`. Every other face
@@ -110,12 +112,20 @@ impl Body {
         if !peak.is_finite() {
             return Err(SolidError::NotFinite { parameter: "peak" });
         }
+        range::coordinate("the peak", peak)?;
         let distance = plane.distance(peak);
         if distance.is_nan() || distance <= 0.0 {
             return Err(SolidError::PeakNotAbove {
                 face: self.face_serial(f),
                 distance,
             });
+        }
+        if distance < MIN_LENGTH {
+            return Err(RangeError::TooSmall {
+                what: "the peak's height over the face",
+                value: distance,
+            }
+            .into());
         }
         let (_, apex) = self.mkev(serials, f, base[0], peak)?;
         for &v in &base[1..] {
@@ -132,8 +142,10 @@ impl Body {
     /// does; `f` ends as the far cap.
     ///
     /// Preconditions (refused otherwise, before any change): `f` is live, a simple
-    /// polygon of at least three edges, of non-zero area; `offset` finite, not zero,
-    /// and pointing out of `f` (`offset · normal > 0`); `scale` finite and above zero.
+    /// polygon of at least three edges, of non-zero area; `offset` finite, at least
+    /// [`range::MIN_LENGTH`] and at most [`range::MAX_LENGTH`] long, and pointing out of
+    /// `f` (`offset · normal > 0`); `scale` finite and above zero; every new vertex within
+    /// the world's range.
     ///
     /// Postconditions: F + n, E + 2n, V + n; each side face `vi vi+1 wi+1 wi` is planar
     /// (its top edge is parallel to its bottom edge).
@@ -241,6 +253,7 @@ impl Body {
         if offset == DVec3::ZERO {
             return Err(SolidError::ZeroOffset);
         }
+        range::length("the sweep offset's length", range::norm(offset))?;
         let along_normal = offset.dot(plane.normal);
         if along_normal.is_nan() || along_normal <= 0.0 {
             return Err(SolidError::OffsetNotOutward {
@@ -267,6 +280,12 @@ impl Body {
             return Err(SolidError::NotFinite {
                 parameter: "swept vertex",
             });
+        }
+        if let Some(&p) = targets
+            .iter()
+            .find(|p| !range::is_within(**p, MAX_COORDINATE))
+        {
+            range::coordinate("a swept vertex", p)?;
         }
 
         // Apply: cannot fail after the checks above.
@@ -350,8 +369,9 @@ pub fn prism_solid(
     polygon: &[DVec2],
     height: f64,
 ) -> Result<Body, SolidError> {
-    positive("height", height)?;
+    length("height", height)?;
     let ccw = counter_clockwise(polygon)?;
+    polygon_extent(&ccw)?;
     let mut l = build_lamina(serials, &ccw, -height / 2.0)?;
     l.body.prism(serials, l.top, DVec3::Z * height, 1.0)?;
     Ok(l.body)
@@ -369,8 +389,9 @@ pub fn pyramid_solid(
     polygon: &[DVec2],
     height: f64,
 ) -> Result<Body, SolidError> {
-    positive("height", height)?;
+    length("height", height)?;
     let ccw = counter_clockwise(polygon)?;
+    polygon_extent(&ccw)?;
     let c = area_centroid(&ccw);
     // Segment i of the input must turn about the centroid the way the whole polygon does.
     let (p, n) = (polygon, polygon.len());
@@ -386,12 +407,33 @@ pub fn pyramid_solid(
 /// BOX(size): MKCUBE with checked sizes, a box `size.x × size.y × size.z` centred on
 /// the origin. F = 6, E = 12, V = 8.
 ///
-/// Preconditions: every size finite and above zero.
+/// Preconditions: every size a length in the world's range (finite, at least
+/// [`range::MIN_LENGTH`], at most [`range::MAX_LENGTH`]).
 pub fn box_solid(serials: &mut Serials, size: DVec3) -> Result<Body, SolidError> {
-    positive("size.x", size.x)?;
-    positive("size.y", size.y)?;
-    positive("size.z", size.z)?;
+    length("size.x", size.x)?;
+    length("size.y", size.y)?;
+    length("size.z", size.z)?;
     Ok(mkcube(serials, size.x, size.y, size.z)?)
+}
+
+/// Refuses a polygon whose bounding box is smaller than [`range::MIN_LENGTH`] on its
+/// longer side, or whose points lie beyond the world's range.
+fn polygon_extent(points: &[DVec2]) -> Result<(), SolidError> {
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for &p in points {
+        range::coordinate("a polygon point", p.extend(0.0))?;
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let across = (hi - lo).max_element();
+    if across < MIN_LENGTH {
+        return Err(RangeError::TooSmall {
+            what: "the polygon's extent",
+            value: across,
+        }
+        .into());
+    }
+    Ok(())
 }
 
 /// The area centroid of a simple polygon of non-zero area.
