@@ -59,6 +59,12 @@ struct ServeArgs {
     /// safe from a crash of the server; a power loss may take the last writes.
     #[arg(long, value_enum, default_value = "full")]
     durability: DurabilityArg,
+    /// Start even if the data directory recovers to an older revision than it once
+    /// acknowledged (a lost write-ahead log, say): the missing writes are logged and the
+    /// world resumes at the acknowledged revision, so no revision or id is issued twice.
+    /// Without it such a directory is refused, naming both revisions.
+    #[arg(long)]
+    accept_loss: bool,
     /// Revisions between background snapshots.
     #[arg(long, default_value_t = 100_000)]
     snapshot_every: u64,
@@ -178,6 +184,7 @@ fn serve(args: ServeArgs) -> ExitCode {
                 DurabilityArg::Full => Durability::Full,
                 DurabilityArg::Normal => Durability::Normal,
             },
+            accept_loss: args.accept_loss,
             ..StoreOptions::default()
         };
         let policy = SnapshotPolicy {
@@ -302,6 +309,11 @@ fn check_data(dir: &std::path::Path) -> ExitCode {
         Err(e) => return fail(format!("cannot recover {}: {e}", dir.display())),
     };
     let world = recovered.world;
+    // The rules every snapshot is loaded with: parts tree, range, serials, cameras.
+    let verdict = winged::store::check_world(&world);
+    if let Err(e) = &verdict {
+        println!("world: {e}");
+    }
     let mut bad = 0;
     for (id, node) in world.bodies() {
         let report = winged::model::check_topology(&node.body);
@@ -319,7 +331,7 @@ fn check_data(dir: &std::path::Path) -> ExitCode {
         recovered.replayed,
         recovered.elapsed.as_secs_f64()
     );
-    if bad == 0 {
+    if bad == 0 && verdict.is_ok() {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE

@@ -121,7 +121,7 @@ impl Run {
             .store
             .get_or_insert_with(|| Store::open(dir, options()).unwrap());
         let batch: Vec<(u64, &Edit)> = self.pending.iter().map(|(r, e)| (*r, e)).collect();
-        store.append(&batch).unwrap();
+        store.append(&batch, self.world.next_serial()).unwrap();
         self.pending.clear();
         self.batches += 1;
         if self.world.revision() > 0 {
@@ -627,7 +627,9 @@ fn a_journaled_edit_sequence_replays_to_the_same_world_entity_by_entity() {
         let b = apply(&mut recovered, &edit).unwrap();
         assert_eq!(a, b);
         assert!(a.id.is_some());
-        store.append(&[(recovered.revision(), &edit)]).unwrap();
+        store
+            .append(&[(recovered.revision(), &edit)], recovered.next_serial())
+            .unwrap();
     }
     assert_same_world(&run.world, &recovered);
 }
@@ -975,7 +977,10 @@ fn a_failed_append_leaves_none_of_its_batch() {
         batch.push((world.revision(), edit));
     }
     let entries: Vec<(u64, &Edit)> = batch.iter().map(|(r, e)| (*r, e)).collect();
-    let err = run.store().append(&entries).unwrap_err();
+    let err = run
+        .store()
+        .append(&entries, world.next_serial())
+        .unwrap_err();
     assert!(matches!(err, StoreError::Sqlite { .. }), "{err:?}");
     assert!(err.to_string().contains("refused by test"), "{err}");
     let count: i64 = conn
@@ -989,7 +994,7 @@ fn a_failed_append_leaves_none_of_its_batch() {
     assert_eq!(run.store().last_revision(), Some(last));
     // Once the cause is gone the same batch goes in.
     conn.execute_batch("DROP TRIGGER fail").unwrap();
-    run.store().append(&entries).unwrap();
+    run.store().append(&entries, world.next_serial()).unwrap();
     assert_eq!(run.store().last_revision(), Some(last + 5));
     run.close();
     run.close();
@@ -1016,7 +1021,8 @@ fn appends_must_continue_the_journal() {
             last + 3,
         ),
     ] {
-        match run.store().append(&entries) {
+        let next_serial = run.world.next_serial();
+        match run.store().append(&entries, next_serial) {
             Err(StoreError::OutOfOrder {
                 expected: e,
                 found: f,
@@ -1083,7 +1089,9 @@ fn a_fresh_directory_is_seeded_by_a_snapshot_and_journaling_continues_from_it() 
     ))
     .unwrap();
     apply(&mut world, &edit).unwrap();
-    store.append(&[(world.revision(), &edit)]).unwrap();
+    store
+        .append(&[(world.revision(), &edit)], world.next_serial())
+        .unwrap();
     assert_eq!(store.journal_len(), 1);
     drop(store);
     let mut store = Store::open(
@@ -1152,7 +1160,9 @@ fn a_journal_that_ends_before_the_snapshot_is_dropped_and_appends_continue() {
     assert_eq!(store.journal_len(), 0);
     let mut world = rec.world;
     apply(&mut world, &edit).unwrap();
-    store.append(&[(world.revision(), &edit)]).unwrap();
+    store
+        .append(&[(world.revision(), &edit)], world.next_serial())
+        .unwrap();
     drop(store);
     let mut store = Store::open(run.dir.path(), options()).unwrap();
     let rec = store.recover(|_, _, _, _| {}).unwrap();

@@ -403,7 +403,8 @@ impl Camera {
                 return Err(CameraError::NonFinite { what });
             }
         }
-        let k = range::unit("the view direction", eye - target)
+        // Halved so that the difference cannot overflow; a unit vector is the same.
+        let k = range::unit("the view direction", eye * 0.5 - target * 0.5)
             .map_err(|_| CameraError::EyeAtTarget)?;
         let up = range::unit("up", up).map_err(|_| CameraError::UpParallel)?;
         let i = up.cross(k);

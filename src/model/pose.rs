@@ -75,15 +75,23 @@ impl Pose {
         if !rotation.is_finite() {
             return Err(PoseError::NonFinite { what: "rotation" });
         }
-        let length = rotation.length();
-        if !length.is_finite() || length < MIN_QUATERNION_LENGTH {
+        // Measured after scaling by the largest component, so that a huge quaternion's
+        // length cannot overflow (nor a tiny one's underflow).
+        let largest = glam::DVec4::from(rotation).abs().max_element();
+        let scaled = if largest > 0.0 {
+            rotation / largest
+        } else {
+            rotation
+        };
+        let length = largest * scaled.length();
+        if length < MIN_QUATERNION_LENGTH {
             return Err(PoseError::ZeroRotation { length });
         }
         // Leave a unit quaternion's bits alone, so validating twice changes nothing.
         let rotation = if (length - 1.0).abs() <= 4.0 * f64::EPSILON {
             rotation
         } else {
-            rotation / length
+            scaled / scaled.length()
         };
         Ok(Pose { position, rotation })
     }

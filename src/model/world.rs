@@ -247,6 +247,20 @@ impl World {
         self.serials.peek()
     }
 
+    /// Moves the revision forward to `revision` and the serial counter forward to
+    /// `next_serial`, changing nothing else (each stays where it is if already past).
+    ///
+    /// For recovery that accepts a loss of acknowledged writes: the world continues at
+    /// the revision and serial that clients were last told of, so that neither a
+    /// revision nor an id is issued twice. Postcondition: `revision() >= revision` and
+    /// `next_serial() >= next_serial`. There is no inverse.
+    pub fn resume_at(&mut self, revision: u64, next_serial: Serial) {
+        self.revision = self.revision.max(revision);
+        if next_serial.0 > 0 {
+            self.serials.skip_past(Serial(next_serial.0 - 1));
+        }
+    }
+
     /// The node of body `b`.
     pub fn node(&self, b: BodyId) -> Option<&BodyNode> {
         self.tree.get(b)

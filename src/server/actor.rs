@@ -50,8 +50,10 @@ pub trait Journal: Send + 'static {
     type Error: std::error::Error;
 
     /// Makes `entries` (consecutive revisions, oldest first) durable: all of them when
-    /// `Ok`, none of them when `Err`.
-    fn append(&mut self, entries: &[Entry<'_>]) -> Result<(), Self::Error>;
+    /// `Ok`, none of them when `Err` (or, if only recording how far the journal reached
+    /// failed, all of them; the writes are still refused). `world` is the world after
+    /// the last entry: its revision and next serial are recorded as reached.
+    fn append(&mut self, entries: &[Entry<'_>], world: &World) -> Result<(), Self::Error>;
 
     /// Called after every committed group with the world as it now is (it may start a
     /// snapshot of it).
@@ -113,7 +115,7 @@ impl Journal for InMemory {
     fn is_durable(&self) -> bool {
         false
     }
-    fn append(&mut self, _: &[Entry<'_>]) -> Result<(), Self::Error> {
+    fn append(&mut self, _: &[Entry<'_>], _: &World) -> Result<(), Self::Error> {
         Ok(())
     }
     fn committed(&mut self, _: &World) {}
@@ -488,7 +490,7 @@ impl<J: Journal> Owner<J> {
                 change: &p.change,
             })
             .collect();
-        let result = self.journal.append(&entries);
+        let result = self.journal.append(&entries, &self.world);
         drop(entries);
         match result {
             Ok(()) => {

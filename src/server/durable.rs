@@ -179,7 +179,7 @@ impl Durable {
 impl Journal for Durable {
     type Error = StoreError;
 
-    fn append(&mut self, entries: &[Entry<'_>]) -> Result<(), StoreError> {
+    fn append(&mut self, entries: &[Entry<'_>], world: &World) -> Result<(), StoreError> {
         let changes: Vec<Option<String>> = entries
             .iter()
             .map(|e| serde_json::to_string(e.change).ok())
@@ -189,7 +189,7 @@ impl Journal for Durable {
             .zip(&changes)
             .map(|(e, c)| (e.revision, e.edit, c.as_deref()))
             .collect();
-        self.store.append_with_changes(&batch)
+        self.store.append_with_changes(&batch, world.next_serial())
     }
 
     fn committed(&mut self, world: &World) {

@@ -121,8 +121,8 @@ pub enum SolveError {
     /// The configuration does not determine a camera.
     #[error("degenerate configuration: {0}")]
     Degenerate(Degeneracy),
-    /// A number is NaN or infinite.
-    #[error("the {what} must be finite numbers")]
+    /// A number is NaN or infinite, or larger than [`MAX_INPUT`] in magnitude.
+    #[error("the {what} must be finite numbers of magnitude at most {max:e}", max = MAX_INPUT)]
     NonFinite {
         /// Which input.
         what: &'static str,
@@ -221,9 +221,14 @@ pub enum SolveError {
     },
 }
 
+/// The largest magnitude of a world point's coordinate or an observation's: the
+/// spatial query limit of [`crate::model::range`], far past the world's content, and
+/// small enough that the solvers' sums of squares cannot overflow.
+pub const MAX_INPUT: f64 = crate::model::range::QUERY_LIMIT;
+
 /// Checks correspondences `world[i] ↔ observed[i]`: as many observations as world
-/// points ([`SolveError::LengthMismatch`]) and every number finite
-/// ([`SolveError::NonFinite`]).
+/// points ([`SolveError::LengthMismatch`]) and every number finite and at most
+/// [`MAX_INPUT`] in magnitude ([`SolveError::NonFinite`]).
 pub(crate) fn check_pairs(world: &[DVec3], observed: &[DVec2]) -> Result<(), SolveError> {
     if world.len() != observed.len() {
         return Err(SolveError::LengthMismatch {
@@ -231,12 +236,13 @@ pub(crate) fn check_pairs(world: &[DVec3], observed: &[DVec2]) -> Result<(), Sol
             observations: observed.len(),
         });
     }
-    if world.iter().any(|x| !x.is_finite()) {
+    let within = |v: f64| v.abs() <= MAX_INPUT;
+    if world.iter().any(|x| !x.to_array().into_iter().all(within)) {
         return Err(SolveError::NonFinite {
             what: "world points",
         });
     }
-    if observed.iter().any(|m| !m.is_finite()) {
+    if observed.iter().any(|m| !m.to_array().into_iter().all(within)) {
         return Err(SolveError::NonFinite {
             what: "observations",
         });

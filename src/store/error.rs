@@ -115,6 +115,50 @@ pub enum StoreError {
         /// Snapshots that failed their checks and were passed over.
         skipped_snapshots: usize,
     },
+    /// The directory recovers to an older revision than it once acknowledged: writes
+    /// that clients were told are durable are missing (a lost or damaged write-ahead log,
+    /// a journal or snapshot restored from an older copy).
+    #[error(
+        "{} recovers to revision {recovered}, but revision {reached} was acknowledged \
+         (recorded in {}): {} acknowledged write(s) are missing, probably with a lost or \
+         damaged write-ahead log (journal.db-wal). Put the missing files back if you can; \
+         or start with --accept-loss to continue from revision {recovered} (the world \
+         then resumes at revision {reached}, and no acknowledged id is issued again)",
+        dir.display(),
+        evidence.display(),
+        reached - recovered
+    )]
+    Behind {
+        /// The data directory.
+        dir: PathBuf,
+        /// The revision the journal and snapshots recover to.
+        recovered: u64,
+        /// The highest revision known to have been acknowledged.
+        reached: u64,
+        /// The file that records it (the reached marker, or an unreadable snapshot).
+        evidence: PathBuf,
+    },
+    /// A snapshot was not written because the world, or the file written for it, failed
+    /// the checks a snapshot is loaded with; the older snapshots are kept.
+    #[error("the snapshot at revision {revision} was not written: {reason}")]
+    SnapshotRefused {
+        /// The world's revision.
+        revision: u64,
+        /// The check that failed.
+        reason: String,
+    },
+    /// The reached marker is damaged in both its slots, so whether writes are missing
+    /// cannot be told.
+    #[error(
+        "the reached marker {} is damaged, so it cannot be told whether acknowledged \
+         writes are missing; start with --accept-loss to continue from what the journal \
+         and snapshots hold",
+        path.display()
+    )]
+    MarkerDamaged {
+        /// The marker file.
+        path: PathBuf,
+    },
     /// The newest snapshot is unreadable and neither an older snapshot nor the journal
     /// reaches its revision: the writes between cannot be recovered from this directory.
     #[error(

@@ -3,6 +3,7 @@
 //!
 //! ```text
 //! DIR/journal.db                 SQLite (WAL): every applied edit by revision, as JSON
+//! DIR/reached                    the highest acknowledged revision and serial (marker)
 //! DIR/snapshots/000000001234.snap  the whole world at revision 1234 (the newest two kept)
 //! ```
 //!
@@ -18,13 +19,16 @@
 //! Everything read from disk is checked (snapshot checksums, the decoded world's
 //! invariants, the journal's format version, each entry's revision): damage gives a
 //! [`StoreError`] or, for a snapshot with an older one to fall back to, a warning, never
-//! a panic or a silently different world.
+//! a panic or a silently different world. A directory that recovers to less than it
+//! once acknowledged (see [`marker`]) is refused unless the operator accepts the loss
+//! ([`StoreOptions::accept_loss`]).
 //!
 //! A snapshot file alone is a complete backup: copy the newest file in `snapshots/`;
 //! to restore, put it into the `snapshots/` directory of an empty data directory.
 
 mod error;
 mod journal;
+pub mod marker;
 mod recover;
 pub mod snapshot;
 
@@ -37,9 +41,10 @@ pub use snapshot::{
     SnapshotError, SnapshotFile, SnapshotWritten, check_world, read_snapshot, write_snapshot,
 };
 
-use crate::model::World;
+use crate::model::{Serial, World};
 use crate::server::edit::{Edit, Outcome};
 use journal::Journal;
+use marker::{Found, Marker, Reached};
 
 /// How hard an append works to survive a power loss.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -61,6 +66,10 @@ pub struct StoreOptions {
     /// How long an operation waits for another connection's lock on the journal (a
     /// `sqlite3` shell reading it, say) before it fails.
     pub busy_timeout: Duration,
+    /// Start even when the directory recovers to less than it once acknowledged (see
+    /// [`StoreError::Behind`]): the world resumes at the acknowledged revision and
+    /// serial, so no revision or id is issued twice, and the loss is logged.
+    pub accept_loss: bool,
 }
 
 impl Default for StoreOptions {
@@ -68,6 +77,7 @@ impl Default for StoreOptions {
         StoreOptions {
             durability: Durability::Full,
             busy_timeout: Duration::from_secs(5),
+            accept_loss: false,
         }
     }
 }
@@ -78,6 +88,11 @@ impl Default for StoreOptions {
 pub struct Store {
     dir: PathBuf,
     journal: Journal,
+    /// `DIR/reached`: how far the journal was ever acknowledged.
+    marker: Marker,
+    /// What the marker held when the store was opened.
+    found: Found,
+    options: StoreOptions,
     /// `DIR/lock`, held exclusively while the store is open: one process per directory.
     _lock: std::fs::File,
 }
@@ -121,9 +136,13 @@ impl Store {
         }
         snapshot::remove_stale_temps(dir)?;
         let journal = Journal::open(&dir.join(journal::FILE_NAME), &options)?;
+        let (marker, found) = Marker::open(dir, options.durability)?;
         Ok(Store {
             dir: dir.to_owned(),
             journal,
+            marker,
+            found,
+            options,
             _lock: lock,
         })
     }
@@ -145,15 +164,23 @@ impl Store {
     }
 
     /// Journals `entries`, each an applied edit and the world revision it produced, in
-    /// ONE transaction (group commit).
+    /// ONE transaction (group commit), then records in the reached marker that the
+    /// journal reached the last entry's revision with `next_serial` as the world's next
+    /// serial.
     ///
     /// Preconditions, checked ([`StoreError::OutOfOrder`]): the revisions are
     /// consecutive and continue the journal (after [`Store::recover`], the first is the
     /// recovered world's revision plus one). Postcondition on `Ok`: every entry is
-    /// committed, durably with [`Durability::Full`]. On `Err` (disk full, say) none of
-    /// the batch is in the journal, and the same batch may be retried.
-    pub fn append(&mut self, entries: &[(u64, &Edit)]) -> Result<(), StoreError> {
-        self.journal.append(entries)
+    /// committed and the marker written, durably with [`Durability::Full`]. On `Err`
+    /// (disk full, say) before the commit none of the batch is in the journal, and the
+    /// same batch may be retried; an `Err` from the marker leaves the batch committed.
+    pub fn append(
+        &mut self,
+        entries: &[(u64, &Edit)],
+        next_serial: Serial,
+    ) -> Result<(), StoreError> {
+        self.journal.append(entries)?;
+        self.mark(entries.last().map(|e| e.0), next_serial)
     }
 
     /// [`Store::append`], each entry with a description of what it changed (text, kept
@@ -161,8 +188,21 @@ impl Store {
     pub fn append_with_changes(
         &mut self,
         entries: &[(u64, &Edit, Option<&str>)],
+        next_serial: Serial,
     ) -> Result<(), StoreError> {
-        self.journal.append_with_changes(entries)
+        self.journal.append_with_changes(entries)?;
+        self.mark(entries.last().map(|e| e.0), next_serial)
+    }
+
+    /// Records a committed revision in the marker.
+    fn mark(&mut self, revision: Option<u64>, next_serial: Serial) -> Result<(), StoreError> {
+        match revision {
+            Some(revision) => self.marker.record(Reached {
+                revision,
+                next_serial: next_serial.0,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// The change descriptions stored with the journal entries after `revision`, oldest
@@ -181,14 +221,89 @@ impl Store {
     /// Refused, rather than yielding a different world, when the journal does not
     /// continue the snapshot or has a hole ([`StoreError::Gap`]), an entry is unreadable
     /// ([`StoreError::Decode`]), refused ([`StoreError::Refused`]) or lands on another
-    /// revision ([`StoreError::Diverged`]), or a damaged newer snapshot held revisions
-    /// nothing else reaches ([`StoreError::Unrecoverable`]). After `Ok`, appends continue
-    /// from the recovered world's revision.
+    /// revision ([`StoreError::Diverged`]). Refused, rather than yielding an older world,
+    /// when a damaged newer snapshot held revisions nothing else reaches
+    /// ([`StoreError::Unrecoverable`]), the reached marker records a later revision
+    /// ([`StoreError::Behind`]) or is damaged ([`StoreError::MarkerDamaged`]): unless
+    /// [`StoreOptions::accept_loss`] is set, in which case the world resumes at the
+    /// highest revision and serial known to have been acknowledged (the loss is logged,
+    /// a verified snapshot written there and the journal behind it emptied), so that no
+    /// revision or id is ever issued twice. After `Ok`, appends continue from the
+    /// recovered world's revision.
     pub fn recover(
         &mut self,
         on_applied: impl FnMut(u64, &Edit, &Outcome, &World),
     ) -> Result<Recovered, StoreError> {
-        recover::recover(&self.dir, &mut self.journal, on_applied)
+        let mut recovered = recover::recover(
+            &self.dir,
+            &mut self.journal,
+            self.options.accept_loss,
+            on_applied,
+        )?;
+        self.check_reached(&mut recovered)?;
+        Ok(recovered)
+    }
+
+    /// Compares the recovered world with what was acknowledged (the marker, an
+    /// unreadable newer snapshot) and refuses, or with `accept_loss` resumes past it.
+    fn check_reached(&mut self, recovered: &mut Recovered) -> Result<(), StoreError> {
+        let marker_path = self.marker.path().to_owned();
+        let mut reached = Reached {
+            revision: 0,
+            next_serial: 0,
+        };
+        let mut evidence = marker_path.clone();
+        match self.found {
+            Found::Absent => {}
+            Found::Reached(r) => reached = r,
+            Found::Damaged if self.options.accept_loss => tracing::warn!(
+                marker = %marker_path.display(),
+                "the reached marker is damaged; continuing from what the journal and snapshots hold (--accept-loss)"
+            ),
+            Found::Damaged => return Err(StoreError::MarkerDamaged { path: marker_path }),
+        }
+        if let Some((path, revision)) = &recovered.unreadable_newer
+            && *revision > reached.revision
+        {
+            reached.revision = *revision;
+            evidence = path.clone();
+        }
+        let world = &mut recovered.world;
+        let behind = world.revision() < reached.revision;
+        if !behind && world.next_serial().0 >= reached.next_serial {
+            return Ok(());
+        }
+        if !self.options.accept_loss {
+            return Err(StoreError::Behind {
+                dir: self.dir.clone(),
+                recovered: world.revision(),
+                reached: reached.revision,
+                evidence,
+            });
+        }
+        let from = world.revision();
+        world.resume_at(reached.revision, Serial(reached.next_serial));
+        tracing::warn!(
+            recovered = from,
+            reached = reached.revision,
+            lost = reached.revision.saturating_sub(from),
+            next_serial = world.next_serial().0,
+            evidence = %evidence.display(),
+            "acknowledged writes are missing; resuming at the acknowledged revision (--accept-loss)"
+        );
+        // The jump must survive the next start: a verified snapshot at the new revision
+        // (with the raised serial counter), then the journal behind it emptied.
+        let written = self.write_snapshot(world)?;
+        self.journal.prune_through(world.revision())?;
+        self.journal.expect_next(world.revision() + 1);
+        self.marker.record(Reached {
+            revision: world.revision(),
+            next_serial: world.next_serial().0,
+        })?;
+        recovered.snapshot = Some(written.revision);
+        recovered.snapshot_path = Some(written.path);
+        recovered.accepted_loss = Some((from, world.revision()));
+        Ok(())
     }
 
     /// Writes a snapshot of `world` into this data directory: [`write_snapshot`].

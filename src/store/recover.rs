@@ -41,6 +41,13 @@ pub struct Recovered {
     pub replayed: u64,
     /// Time taken, loading the snapshot included.
     pub elapsed: Duration,
+    /// A newer snapshot that could not be read, and its revision, when it proves the
+    /// world reached further than it recovered to (only with `accept_loss`; otherwise
+    /// recovery is refused).
+    pub unreadable_newer: Option<(PathBuf, u64)>,
+    /// The revisions from and to which the world was moved on, when acknowledged writes
+    /// were missing and the loss was accepted.
+    pub accepted_loss: Option<(u64, u64)>,
 }
 
 /// Loads the newest usable snapshot in `dir` (or starts from [`World::new`]) and
@@ -51,11 +58,13 @@ pub struct Recovered {
 /// right after it or skip a revision, [`StoreError::Refused`] when an entry is refused,
 /// [`StoreError::Diverged`] when an entry does not leave the world at its own revision,
 /// [`StoreError::Decode`] for an unreadable entry, and [`StoreError::Unrecoverable`]
-/// when an unreadable newer snapshot held revisions nothing else reaches. On success the
-/// journal expects the recovered world's revision plus one next.
+/// when an unreadable newer snapshot held revisions nothing else reaches (with
+/// `accept_loss`, that snapshot is named in [`Recovered::unreadable_newer`] instead). On
+/// success the journal expects the recovered world's revision plus one next.
 pub(crate) fn recover(
     dir: &Path,
     journal: &mut Journal,
+    accept_loss: bool,
     mut on_applied: impl FnMut(u64, &Edit, &Outcome, &World),
 ) -> Result<Recovered, StoreError> {
     let started = Instant::now();
@@ -117,14 +126,18 @@ pub(crate) fn recover(
     })?;
     // A newer snapshot that could not be read still proves the world reached its
     // revision: stopping short of it would silently lose writes.
+    let mut unreadable_newer = None;
     if let Some(newest) = skipped.first()
         && newest.revision > world.revision()
     {
-        return Err(StoreError::Unrecoverable {
-            snapshot: newest.path.clone(),
-            newest: newest.revision,
-            recovered: world.revision(),
-        });
+        if !accept_loss {
+            return Err(StoreError::Unrecoverable {
+                snapshot: newest.path.clone(),
+                newest: newest.revision,
+                recovered: world.revision(),
+            });
+        }
+        unreadable_newer = Some((newest.path.clone(), newest.revision));
     }
     // A journal that ends before the snapshot lags behind it (its last appends were
     // lost, or never made, while the snapshot was written): what it holds is older than
@@ -156,6 +169,8 @@ pub(crate) fn recover(
         skipped_snapshots: skipped.len(),
         replayed,
         elapsed,
+        unreadable_newer,
+        accepted_loss: None,
     })
 }
 

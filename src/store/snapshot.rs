@@ -132,6 +132,10 @@ pub fn file_name(revision: u64) -> String {
 /// Writes a snapshot of `world` into `DIR/snapshots/` (creating it if needed), durably,
 /// then deletes all but the newest [`KEEP`] snapshots.
 ///
+/// Verified before it replaces anything: the world is checked with the loader's rules
+/// ([`check_world`]) and the file written is read back and checksummed; either failing
+/// is [`StoreError::SnapshotRefused`] and leaves the older snapshots as they were.
+///
 /// Callable from any thread, given a world it may read (a cloned snapshot of the live
 /// world does: bodies are shared, not copied). Postcondition on `Ok`: the file is on
 /// disk under its final name and the directory entry is flushed, so it survives a power
@@ -144,12 +148,19 @@ pub fn write_snapshot(dir: &Path, world: &World) -> Result<SnapshotWritten, Stor
     fs::create_dir_all(&snaps)
         .map_err(|e| StoreError::io("creating snapshot directory", &snaps, e))?;
     let revision = world.revision();
+    // The loader's own rules, before the file can replace an older good one.
+    check_world(world).map_err(|reason| StoreError::SnapshotRefused { revision, reason })?;
     let (header, payload) = encode_parts(world);
     let path = snaps.join(file_name(revision));
     let tmp = snaps.join(temp_name(revision));
     if let Err(e) = write_synced(&tmp, &[&header, &payload]) {
         let _ = fs::remove_file(&tmp);
         return Err(StoreError::io("writing snapshot", &tmp, e));
+    }
+    // The file as the file system holds it, read back and checksummed.
+    if let Err(reason) = verify_written(&tmp, &header) {
+        let _ = fs::remove_file(&tmp);
+        return Err(StoreError::SnapshotRefused { revision, reason });
     }
     if let Err(e) = fs::rename(&tmp, &path) {
         let _ = fs::remove_file(&tmp);
@@ -166,6 +177,47 @@ pub fn write_snapshot(dir: &Path, world: &World) -> Result<SnapshotWritten, Stor
         duration: started.elapsed(),
         oldest_kept,
     })
+}
+
+/// Reads a just-written snapshot file back and checks its length and checksum against
+/// the `header` it was written with.
+fn verify_written(path: &Path, header: &[u8; HEADER_LEN]) -> Result<(), String> {
+    let h = Header::parse(header).map_err(|e| e.to_string())?;
+    let mut file = File::open(path).map_err(|e| format!("reading it back: {e}"))?;
+    let mut head = [0u8; HEADER_LEN];
+    file.read_exact(&mut head)
+        .map_err(|e| format!("reading it back: {e}"))?;
+    if &head != header {
+        return Err("the header read back differs from the one written".to_owned());
+    }
+    let mut crc = crc32fast::Hasher::new();
+    crc.update(&head[..CHECKED_HEADER_LEN]);
+    let mut buf = vec![0u8; 1 << 20];
+    let mut read = 0u64;
+    loop {
+        let n = file
+            .read(&mut buf)
+            .map_err(|e| format!("reading it back: {e}"))?;
+        if n == 0 {
+            break;
+        }
+        crc.update(&buf[..n]);
+        read += n as u64;
+    }
+    if read != h.payload_len {
+        return Err(format!(
+            "{read} payload bytes read back, {} written",
+            h.payload_len
+        ));
+    }
+    let computed = crc.finalize();
+    if computed != h.crc {
+        return Err(format!(
+            "the checksum read back is {computed:08x}, {:08x} was written",
+            h.crc
+        ));
+    }
+    Ok(())
 }
 
 /// Reads and checks one snapshot file (see the [module documentation](self)). If the

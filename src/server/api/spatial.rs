@@ -22,9 +22,12 @@
 //!
 //! Malformed requests (bad JSON or query strings, unknown fields) are answered 400;
 //! well-formed ones with values a query cannot take (NaN or infinite numbers, a negative
-//! radius, an empty box, a zero direction, a tolerance that is not a positive length)
+//! radius, an empty box, a zero direction, a tolerance that is not a positive length, a
+//! centre, point or origin farther than [`QUERY_LIMIT`] from the origin on an axis)
 //! 422 `invalid-query`, naming the field as the request spells it; an answer that would
 //! hold more than `max_features` faces, edges and vertices 422 `too-many-features`.
+//! Box corners, radii and distances beyond that limit are clamped to it: the world's
+//! content lies well inside (see [`crate::model::range`]), so no answer changes.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, RwLock, RwLockWriteGuard};
@@ -38,6 +41,7 @@ use serde::{Deserialize, Serialize};
 use tokio::sync::Semaphore;
 
 use super::{Answer, AppState, read_answer, snapshot};
+use crate::model::range::{self, QUERY_LIMIT};
 use crate::model::{BodyId, Serial, World};
 use crate::server::changes::{Action, Field, Kind};
 use crate::server::events::{Feed, Since};
@@ -520,17 +524,32 @@ fn refused(e: QueryError) -> Problem {
     }
 }
 
+/// A query's centre, point or origin: finite and within [`QUERY_LIMIT`] of the origin on
+/// each axis, so that every distance to the world's content is a finite number.
 fn point(v: [f64; 3], name: &str) -> Result<DVec3, Problem> {
     let p = DVec3::from_array(v);
-    if p.is_finite() {
-        Ok(p)
-    } else {
-        Err(invalid(format!(
+    if !p.is_finite() {
+        return Err(invalid(format!(
             "{name} must be finite (got [{}, {}, {}])",
             v[0], v[1], v[2]
-        )))
+        )));
     }
+    if !range::is_within(p, QUERY_LIMIT) {
+        return Err(invalid(format!(
+            "{name} must lie within {QUERY_LIMIT:e} m of the origin on each axis (got [{}, {}, {}]); \
+             the world's content lies within {:e} m",
+            v[0],
+            v[1],
+            v[2],
+            range::WORLD_EXTENT
+        )));
+    }
+    Ok(p)
 }
+
+/// A length that reaches past everything from any query point: a radius or distance
+/// beyond it is clamped to it, which changes no answer.
+const REACH_ALL: f64 = 4.0 * QUERY_LIMIT;
 
 fn max_distance(d: Option<f64>) -> Result<f64, Problem> {
     match d {
@@ -538,6 +557,7 @@ fn max_distance(d: Option<f64>) -> Result<f64, Problem> {
         Some(d) if d.is_nan() || d < 0.0 => Err(invalid(format!(
             "max_distance must be zero or more meters (got {d}); leave it out for no limit"
         ))),
+        Some(d) if d > REACH_ALL => Ok(f64::INFINITY),
         Some(d) => Ok(d),
     }
 }
@@ -571,7 +591,7 @@ fn sphere_query(
     }
     Ok(SphereQuery {
         center,
-        radius,
+        radius: radius.min(REACH_ALL),
         detail: detail.unwrap_or_default(),
         tolerance,
         max_features: max_features(features),
@@ -600,9 +620,14 @@ fn box_query(
             )));
         }
     }
+    // Corners beyond the query limit are clamped to it: the world's content lies well
+    // inside, so the answer is the same, and no extent of the box can overflow.
+    let clamp = |v: [f64; 3]| {
+        DVec3::from_array(v).clamp(DVec3::splat(-QUERY_LIMIT), DVec3::splat(QUERY_LIMIT))
+    };
     Ok(BoxQuery {
-        min: DVec3::from_array(min),
-        max: DVec3::from_array(max),
+        min: clamp(min),
+        max: clamp(max),
         detail: detail.unwrap_or_default(),
         max_features: max_features(features),
         max_bodies: usize::MAX,
@@ -612,7 +637,13 @@ fn box_query(
 /// A ray's direction scaled so that its largest component is ±1 (so that its length
 /// cannot overflow), checked.
 fn direction(v: [f64; 3], names: &Names) -> Result<DVec3, Problem> {
-    let d = point(v, names.direction)?;
+    let d = DVec3::from_array(v);
+    if !d.is_finite() {
+        return Err(invalid(format!(
+            "{} must be finite (got [{}, {}, {}])",
+            names.direction, v[0], v[1], v[2]
+        )));
+    }
     let m = d.abs().max_element();
     if m == 0.0 {
         return Err(invalid(format!(
@@ -999,6 +1030,14 @@ mod tests {
             direction([1e308, 1e308, 0.0], &JSON_NAMES).ok(),
             Some(DVec3::new(1.0, 1.0, 0.0))
         );
+        let p = point([0.0, 0.0, 1e155], "x, y and z").expect_err("beyond the query limit");
+        assert!(p.detail.contains("within 1e12 m"), "{}", p.detail);
+        let b = box_query([-1e308; 3], [1e308; 3], None, None, &JSON_NAMES).expect("clamped");
+        assert_eq!(
+            (b.min, b.max),
+            (DVec3::splat(-QUERY_LIMIT), DVec3::splat(QUERY_LIMIT))
+        );
+        assert_eq!(max_distance(Some(1e300)).ok(), Some(f64::INFINITY));
         assert!(max_distance(Some(f64::NAN)).is_err());
         assert!(max_distance(Some(-1.0)).is_err());
         assert_eq!(max_features(Some(usize::MAX)), MAX_FEATURES);
