@@ -151,7 +151,7 @@ impl Builder {
 
     fn flush(&mut self) -> Result<(), winged::store::StoreError> {
         let batch: Vec<(u64, &Edit)> = self.pending.iter().map(|(r, e)| (*r, e)).collect();
-        self.store.append(&batch)?;
+        self.store.append(&batch, self.world.next_serial())?;
         self.pending.clear();
         Ok(())
     }

@@ -116,20 +116,47 @@ impl Color {
 /// The longest name a body, camera or light may have, in bytes.
 pub const MAX_NAME_LEN: usize = 128;
 
-/// Checks a body, camera or light name: 1 to [`MAX_NAME_LEN`] bytes of UTF-8, no control
-/// characters, no leading or trailing white space. Returns what is wrong.
-pub fn validate_name(name: &str) -> Result<(), &'static str> {
+/// Checks a body, camera or light name: 1 to [`MAX_NAME_LEN`] bytes of UTF-8 in Unicode
+/// normalization form C, no control, format (bidirectional controls, zero-width
+/// characters), line or paragraph separator characters, no U+FFFD replacement character
+/// (the mark of bytes that were not UTF-8), no leading or trailing white space. Returns
+/// what is wrong.
+///
+/// So a name reads as it is stored, and two names that look alike are spelled alike.
+pub fn validate_name(name: &str) -> Result<(), String> {
+    use unicode_properties::{GeneralCategory, UnicodeGeneralCategory};
     if name.is_empty() {
-        return Err("the name is empty");
+        return Err("the name is empty".to_owned());
     }
     if name.len() > MAX_NAME_LEN {
-        return Err("the name is longer than 128 bytes");
+        return Err(format!(
+            "the name is {} bytes long, longer than {MAX_NAME_LEN}",
+            name.len()
+        ));
     }
-    if name.chars().any(char::is_control) {
-        return Err("the name contains a control character");
+    for c in name.chars() {
+        let kind = match c.general_category() {
+            GeneralCategory::Control => "a control character",
+            GeneralCategory::Format => {
+                "a format character (bidirectional controls and zero-width characters are refused)"
+            }
+            GeneralCategory::LineSeparator | GeneralCategory::ParagraphSeparator => {
+                "a line or paragraph separator"
+            }
+            _ if c == char::REPLACEMENT_CHARACTER => {
+                "the replacement character, the mark of bytes that were not UTF-8"
+            }
+            _ => continue,
+        };
+        return Err(format!("the name contains {kind} (U+{:04X})", c as u32));
     }
     if name.trim() != name {
-        return Err("the name begins or ends with white space");
+        return Err("the name begins or ends with white space".to_owned());
+    }
+    if !unicode_normalization::is_nfc(name) {
+        return Err(
+            "the name is not in Unicode normalization form C (NFC); normalize it first".to_owned(),
+        );
     }
     Ok(())
 }

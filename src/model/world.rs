@@ -106,7 +106,7 @@ pub enum WorldError {
         /// The name given.
         name: String,
         /// What is wrong with it.
-        reason: &'static str,
+        reason: String,
     },
     /// The name already belongs to another body.
     #[error("the name {name:?} already belongs to body {owner}")]

@@ -242,7 +242,10 @@ pub(crate) fn check_pairs(world: &[DVec3], observed: &[DVec2]) -> Result<(), Sol
             what: "world points",
         });
     }
-    if observed.iter().any(|m| !m.to_array().into_iter().all(within)) {
+    if observed
+        .iter()
+        .any(|m| !m.to_array().into_iter().all(within))
+    {
         return Err(SolveError::NonFinite {
             what: "observations",
         });

@@ -77,6 +77,11 @@ pub(super) async fn list_bodies(
     q: Result<Query<ListQuery>, QueryRejection>,
 ) -> Answer {
     let Query(q) = q?;
+    // A name no body can have is a mistake in the query, not an empty answer.
+    if let Some(name) = &q.name {
+        crate::model::parts::validate_name(name)
+            .map_err(|reason| Problem::bad_request(format!("name {name:?}: {reason}")))?;
+    }
     let w = snapshot(&h).await?;
     let revision = w.revision();
     let bodies: Vec<BodyDto> = tokio::task::spawn_blocking(move || {
