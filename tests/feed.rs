@@ -321,7 +321,8 @@ fn three_subscribers_see_every_change_once_and_in_order_while_eight_clients_writ
         writers.push(thread::spawn(move || {
             ready.wait();
             for j in 0..EACH {
-                let x = (i * 100 + j) as f64;
+                // Each pose differs from the one before, so each patch is a change.
+                let x = (i * 100 + j + 1) as f64;
                 s.patch(
                     &format!("/v1/bodies/{body}"),
                     &json!({"pose": {"position": [x, 0, 0], "rotation": [0, 0, 0, 1]}}),

@@ -687,6 +687,10 @@ impl World {
     /// that order. Every check is made before anything changes (none of the three
     /// changes affects whether another is allowed), so the cost is that of the changes
     /// themselves, not of a trial copy of the world.
+    ///
+    /// Returns whether anything changed. A request whose every given value equals the
+    /// body's current one (or that gives none) changes nothing and leaves the revision
+    /// as it was; it is still refused as above (an unknown body, say).
     pub fn update(
         &mut self,
         b: BodyId,
@@ -694,7 +698,7 @@ impl World {
         supart: Option<BodyId>,
         pose: Option<Pose>,
         color: Option<Option<Color>>,
-    ) -> Result<(), WorldError> {
+    ) -> Result<bool, WorldError> {
         // Plan: the same checks, in the same order, as rename, attach and set_pose.
         let name = match name {
             Some(name) => {
@@ -726,13 +730,20 @@ impl World {
         if color.is_some() {
             self.live_part(b, "coloured")?;
         }
+        // Drop what would not change: a write that changes nothing is no write.
+        let node = self.tree.get(b).expect("checked");
+        let name = name.filter(|n| *n != node.name);
+        let supart = supart.filter(|&s| Some(s) != self.tree.supart(b));
+        let pose = pose.filter(|p| supart.is_some() || *p != node.pose);
+        let color = color.filter(|c| *c != node.color);
+        if name.is_none() && supart.is_none() && pose.is_none() && color.is_none() {
+            return Ok(false);
+        }
         // Apply: nothing below can fail.
         if let Some(name) = name {
             self.tree.set_name(b, name);
         }
-        if let Some(supart) = supart
-            && self.tree.supart(b) != Some(supart)
-        {
+        if let Some(supart) = supart {
             self.relink_in_place(b, supart);
         }
         if let Some(pose) = pose {
@@ -742,7 +753,7 @@ impl World {
             self.tree.get_mut(b).expect("checked").color = color;
         }
         self.written();
-        Ok(())
+        Ok(true)
     }
 
     /// KLBFEV: removes body `b` with all its faces, edges and vertices, and all its

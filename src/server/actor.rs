@@ -376,6 +376,14 @@ struct Pending {
     change: Change,
 }
 
+/// What applying one write left to do.
+enum Step {
+    /// It changed the world: journal it, then answer and publish its change.
+    Changed(Pending),
+    /// It changed nothing: answer with the revision the world is at, journal nothing.
+    Unchanged(oneshot::Sender<Result<Applied, WriteError>>, Outcome),
+}
+
 impl<J: Journal> Owner<J> {
     fn run(mut self, mut rx: mpsc::Receiver<Command>) {
         let mut batch = Vec::with_capacity(self.max_batch);
@@ -395,6 +403,7 @@ impl<J: Journal> Owner<J> {
     /// Applies the writes of `batch`, commits them together, then answers everyone.
     fn handle(&mut self, batch: &mut Vec<Command>) {
         let mut pending: Vec<Pending> = Vec::new();
+        let mut unchanged = Vec::new();
         let mut readers = Vec::new();
         let mut checkpoints = Vec::new();
         for cmd in batch.drain(..) {
@@ -403,17 +412,23 @@ impl<J: Journal> Owner<J> {
                     edit,
                     expected,
                     reply,
-                } => {
-                    if let Some(p) = self.apply_one(edit, expected, reply) {
-                        pending.push(p);
-                    }
-                }
+                } => match self.apply_one(edit, expected, reply) {
+                    Some(Step::Changed(p)) => pending.push(p),
+                    Some(Step::Unchanged(reply, outcome)) => unchanged.push((reply, outcome)),
+                    None => {}
+                },
                 Command::Snapshot { reply } => readers.push(reply),
                 Command::Checkpoint { reply } => checkpoints.push(reply),
             }
         }
         if !pending.is_empty() {
             self.commit(pending);
+        }
+        // After the commit, so that the revision they name is durable (or, if the
+        // commit failed, the one the world went back to).
+        for (reply, outcome) in unchanged {
+            let revision = self.world.revision();
+            let _ = reply.send(Ok(Applied { outcome, revision }));
         }
         if !readers.is_empty() {
             let snap = self.snapshot();
@@ -433,13 +448,15 @@ impl<J: Journal> Owner<J> {
         }
     }
 
-    /// Applies one write; answers a refusal at once, or returns it pending its commit.
+    /// Applies one write; answers a refusal at once, or returns it pending its commit,
+    /// or, when it changed nothing (the revision did not move), pending its answer
+    /// without a journal entry or a change.
     fn apply_one(
         &mut self,
         edit: Box<Edit>,
         expected: Option<u64>,
         reply: oneshot::Sender<Result<Applied, WriteError>>,
-    ) -> Option<Pending> {
+    ) -> Option<Step> {
         let failed = self
             .failed
             .lock()
@@ -458,15 +475,16 @@ impl<J: Journal> Owner<J> {
         }
         let before = changes::before(&self.world, &edit);
         match apply(&mut self.world, &edit) {
+            Ok(outcome) if self.world.revision() == actual => Some(Step::Unchanged(reply, outcome)),
             Ok(outcome) => {
                 let revision = self.world.revision();
                 let change = changes::describe(revision, &edit, &outcome, &before, &self.world);
-                Some(Pending {
+                Some(Step::Changed(Pending {
                     reply,
                     edit,
                     applied: Applied { outcome, revision },
                     change,
-                })
+                }))
             }
             Err(e) => {
                 // A requester that gave up waiting is no reason to stop.

@@ -27,6 +27,17 @@ impl Server {
 
     /// As [`Server::start`], with extra environment variables.
     pub fn start_with_env(args: &[&str], env: &[(&str, &str)]) -> Server {
+        Self::try_start_with_env(args, env)
+            .unwrap_or_else(|seen| panic!("the server did not start listening:\n{seen}"))
+    }
+
+    /// As [`Server::start`]; `Err` with the server's output when it exits (or does not
+    /// listen within 60 s) instead.
+    pub fn try_start(args: &[&str]) -> Result<Server, String> {
+        Self::try_start_with_env(args, &[])
+    }
+
+    fn try_start_with_env(args: &[&str], env: &[(&str, &str)]) -> Result<Server, String> {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_winged"));
         cmd.arg("serve")
             .arg("--addr")
@@ -72,11 +83,17 @@ impl Server {
                         .find_map(|w| w.strip_prefix("bound="))
                     {
                         server.base = format!("http://{addr}");
-                        return server;
+                        return Ok(server);
                     }
                     seen.push(line);
                 }
-                Err(_) => panic!("the server did not start listening:\n{}", seen.join("\n")),
+                // Both output pipes closed (the server exited), or 60 s of silence.
+                Err(_) => {
+                    let _ = server.child.kill();
+                    let status = server.child.wait().ok();
+                    seen.push(format!("(exit: {status:?})"));
+                    return Err(seen.join("\n"));
+                }
             }
         }
     }
