@@ -763,8 +763,8 @@ fn create_bodies(c: &Contract) {
     );
     post(
         json!({"name": " padded", "shape": {"type": "seminal"}}),
-        400,
-        Spec::Either,
+        422,
+        Spec::Refuses,
     );
     post(
         json!({"shape": {"type": "seminal"}, "pose": {"rotation": [0, 0, 0, 0]}}),
@@ -860,7 +860,7 @@ fn patch_bodies(c: &Contract) {
         422,
         Spec::Either,
     );
-    c.refused_json("PATCH", t, &p, json!({"name": ""}), 400, Spec::Refuses);
+    c.refused_json("PATCH", t, &p, json!({"name": ""}), 422, Spec::Refuses);
     c.refused_json("PATCH", t, &p, json!({"colour": 1}), 400, Spec::Refuses);
     c.refused_json(
         "PATCH",
@@ -1311,7 +1311,7 @@ fn cameras(c: &Contract) {
         one,
         "/v1/cameras/%20side",
         json!({"pose": {}, "intrinsics": intrinsics}),
-        400,
+        422,
         Spec::Either,
     );
     c.refused(

@@ -272,15 +272,23 @@ fn names_that_would_not_read_back_as_written_are_refused() {
     for name in bad {
         let req = json!({"name": name, "shape": {"type": "box", "size": [1, 1, 1]}});
         let (st, p) = call(&a, "POST", &format!("{base}/v1/bodies"), Some(&req));
-        assert_eq!(st, 400, "{name:?}: {p}");
+        assert_eq!(st, 422, "{name:?}: {p}");
+        assert!(p["type"].as_str().unwrap().ends_with("invalid-name"), "{p}");
     }
     assert_eq!(revision(&a, &base), before);
-    // The NFC spelling of the same name is fine.
+    // The NFC spelling of the same name is fine, and a filter in another normalization
+    // form finds it.
     let req = json!({"name": "\u{00E9}tagere", "shape": {"type": "box", "size": [1, 1, 1]}});
-    assert_eq!(
-        call(&a, "POST", &format!("{base}/v1/bodies"), Some(&req)).0,
-        201
+    let (st, made) = call(&a, "POST", &format!("{base}/v1/bodies"), Some(&req));
+    assert_eq!(st, 201, "{made}");
+    let (st, found) = call(
+        &a,
+        "GET",
+        &format!("{base}/v1/bodies?name=e%CC%81tagere"),
+        None,
     );
+    assert_eq!(st, 200, "{found}");
+    assert_eq!(found["bodies"][0]["id"], made["id"], "{found}");
 }
 
 // ------------------------------------------------------------------ damaged directories

@@ -113,10 +113,11 @@ impl Color {
     }
 }
 
-/// The longest name a body, camera or light may have, in bytes.
+/// The longest name a body, camera or light may have, in characters (Unicode code
+/// points, as JSON Schema's `maxLength` counts them).
 pub const MAX_NAME_LEN: usize = 128;
 
-/// Checks a body, camera or light name: 1 to [`MAX_NAME_LEN`] bytes of UTF-8 in Unicode
+/// Checks a body, camera or light name: 1 to [`MAX_NAME_LEN`] characters in Unicode
 /// normalization form C, no control, format (bidirectional controls, zero-width
 /// characters), line or paragraph separator characters, no U+FFFD replacement character
 /// (the mark of bytes that were not UTF-8), no leading or trailing white space. Returns
@@ -128,10 +129,10 @@ pub fn validate_name(name: &str) -> Result<(), String> {
     if name.is_empty() {
         return Err("the name is empty".to_owned());
     }
-    if name.len() > MAX_NAME_LEN {
+    let length = name.chars().count();
+    if length > MAX_NAME_LEN {
         return Err(format!(
-            "the name is {} bytes long, longer than {MAX_NAME_LEN}",
-            name.len()
+            "the name is {length} characters long, longer than {MAX_NAME_LEN}"
         ));
     }
     for c in name.chars() {

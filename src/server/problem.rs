@@ -188,6 +188,12 @@ impl From<QueryRejection> for Problem {
     }
 }
 
+/// 422 `invalid-name`: a name that breaks the naming rules (see
+/// [`crate::model::parts::validate_name`]).
+pub fn invalid_name(detail: impl Into<String>) -> Problem {
+    unprocessable("invalid-name", "Invalid name", detail.into())
+}
+
 /// 422 `out-of-range`: the write would take the world outside its range.
 fn out_of_range(detail: String) -> Problem {
     unprocessable("out-of-range", "Outside the world's range", detail)
@@ -239,9 +245,8 @@ fn world_problem(w: WorldError, detail: String) -> Problem {
         WorldError::Cycle { .. } | WorldError::Root { .. } => {
             unprocessable("invalid-parts-tree", "Invalid parts-tree change", detail)
         }
-        WorldError::BadName { .. } | WorldError::Pose(_) | WorldError::NonFinite { .. } => {
-            Problem::bad_request(detail)
-        }
+        WorldError::BadName { .. } => invalid_name(detail),
+        WorldError::Pose(_) | WorldError::NonFinite { .. } => Problem::bad_request(detail),
         WorldError::OutOfRange(_) | WorldError::Placement { .. } => out_of_range(detail),
     }
 }

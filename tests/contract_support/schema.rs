@@ -3,7 +3,7 @@
 //! Implemented: `$ref` (local `#/...` pointers), `type` (one or several), `enum`,
 //! `const`, `properties`, `required`, `additionalProperties`, `items`, `minItems`,
 //! `maxItems`, `minimum`, `maximum`, `exclusiveMinimum`, `exclusiveMaximum`,
-//! `minLength`, `maxLength`, `allOf`, `anyOf`, `oneOf`, `not`, and OpenAPI's
+//! `minLength`, `maxLength`, `pattern`, `allOf`, `anyOf`, `oneOf`, `not`, and OpenAPI's
 //! `discriminator` (used to pick the branch whose errors are reported, and checked for
 //! consistency with its `oneOf`). Annotations (`description`, `default`, ...) are
 //! ignored. Any other keyword is an error, so that the contract cannot quietly use a
@@ -32,6 +32,7 @@ const ASSERTIONS: &[&str] = &[
     "exclusiveMaximum",
     "minLength",
     "maxLength",
+    "pattern",
     "allOf",
     "anyOf",
     "oneOf",
@@ -200,6 +201,13 @@ impl<'a> Validator<'a> {
                 && len > m
             {
                 errs.push(format!("{at_or_root}: {v} is longer than {m} characters"));
+            }
+            if let Some(p) = s.get("pattern").and_then(Value::as_str) {
+                match regex::Regex::new(p) {
+                    Ok(re) if re.is_match(text) => {}
+                    Ok(_) => errs.push(format!("{at_or_root}: {v} does not match {p:?}")),
+                    Err(e) => errs.push(format!("{at_or_root}: pattern {p:?}: {e}")),
+                }
             }
         }
         if let Value::Array(items) = v {
@@ -432,6 +440,11 @@ impl<'a> Validator<'a> {
                     }
                 }
                 "discriminator" => self.lint_discriminator(s, val, &here, out),
+                "pattern" => match val.as_str().map(regex::Regex::new) {
+                    Some(Ok(_)) => {}
+                    Some(Err(e)) => out.push(format!("{here}: {e}")),
+                    None => out.push(format!("{here}: must be a string")),
+                },
                 "const" => {}
                 k if ANNOTATIONS.contains(&k) => {}
                 k => out.push(format!("{here}: schema keyword {k:?} is not supported")),
@@ -644,7 +657,7 @@ mod tests {
     fn unknown_keywords_and_dangling_references_are_schema_problems() {
         let d = doc();
         let v = Validator::new(&d);
-        let bad = json!({"type": "string", "pattern": "^a"});
+        let bad = json!({"type": "string", "contentSchema": {}});
         assert_eq!(v.schema_problems(&bad, "#").len(), 1);
         assert_eq!(v.errors(&bad, &json!("a")).len(), 1);
         let dangling = json!({"$ref": "#/components/schemas/Nope"});

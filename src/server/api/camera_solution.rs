@@ -522,8 +522,9 @@ pub(super) async fn camera_solution(
                 ),
             ));
         }
-        crate::model::parts::validate_name(name)
-            .map_err(|reason| Problem::bad_request(format!("store_as {name:?}: {reason}")))?;
+        crate::model::parts::validate_name(name).map_err(|reason| {
+            crate::server::problem::invalid_name(format!("store_as {name:?}: {reason}"))
+        })?;
     }
     let world = snapshot(&state.handle).await?;
     let outcome = match form {

@@ -11,6 +11,7 @@ mod model;
 mod ops;
 pub mod precondition;
 pub mod spatial;
+pub mod whole_numbers;
 
 use std::sync::Arc;
 

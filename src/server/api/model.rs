@@ -76,9 +76,12 @@ pub(super) async fn list_bodies(
     State(h): State<Handle>,
     q: Result<Query<ListQuery>, QueryRejection>,
 ) -> Answer {
-    let Query(q) = q?;
-    // A name no body can have is a mistake in the query, not an empty answer.
-    if let Some(name) = &q.name {
+    let Query(mut q) = q?;
+    // A name is looked up in normalization form C, the form names are stored in; a name
+    // no body can have even then is a mistake in the query, not an empty answer.
+    if let Some(name) = q.name.as_mut() {
+        use unicode_normalization::UnicodeNormalization;
+        *name = name.nfc().collect();
         crate::model::parts::validate_name(name)
             .map_err(|reason| Problem::bad_request(format!("name {name:?}: {reason}")))?;
     }
