@@ -246,7 +246,8 @@ fn world_problem(w: WorldError, detail: String) -> Problem {
             unprocessable("invalid-parts-tree", "Invalid parts-tree change", detail)
         }
         WorldError::BadName { .. } => invalid_name(detail),
-        WorldError::Pose(_) | WorldError::NonFinite { .. } => Problem::bad_request(detail),
+        WorldError::Pose(_) => unprocessable("invalid-pose", "Invalid pose", detail),
+        WorldError::NonFinite { .. } => Problem::bad_request(detail),
         WorldError::OutOfRange(_) | WorldError::Placement { .. } => out_of_range(detail),
     }
 }
