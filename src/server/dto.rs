@@ -4,6 +4,10 @@
 //! Ids are the kernel's serial numbers (JSON integers). Vectors are `[x, y, z]` arrays in
 //! meters; a pose is `{"position": [x, y, z], "rotation": [qx, qy, qz, qw]}`.
 
+pub mod bounded;
+mod face_list;
+mod shape_json;
+
 use glam::{DQuat, DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
@@ -11,6 +15,20 @@ use crate::model::{
     BaumgartRaster, Body, Camera, Color, Intrinsics, Light, Pose, camera::CameraError,
     geometry::Bounds,
 };
+pub use face_list::FaceList;
+
+/// The most faces a body made by one request may have.
+pub const MAX_BODY_FACES: usize = 2_000_000;
+
+/// The most vertices a polyhedron given in one request may have: twice the faces, which
+/// every closed polyhedron of [`MAX_BODY_FACES`] faces without handles stays below
+/// (its vertices number at most `2F − 4`, when each meets three faces).
+pub const MAX_BODY_VERTICES: usize = 2 * MAX_BODY_FACES;
+
+/// The most vertex indices a polyhedron given in one request may list in all its faces:
+/// six per face, which every closed polyhedron of [`MAX_BODY_FACES`] faces without
+/// handles stays below (its indices, two per edge, number at most `6F − 12`).
+pub const MAX_BODY_CORNERS: usize = 6 * MAX_BODY_FACES;
 
 /// A pose relative to the parent body.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
@@ -57,8 +75,14 @@ fn d16() -> u32 {
 
 /// The solid a new body starts as. Primitives are centred on the body's origin; those
 /// with an axis have it on z, centred in height.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+///
+/// In JSON, an object whose `type` names the variant (snake case) beside the variant's
+/// fields. It is read field by field as it streams, lists bounded while they are read
+/// (see `shape_json`): unknown fields and those of other variants are refused, and a
+/// polyhedron past [`MAX_BODY_VERTICES`], [`MAX_BODY_FACES`] or [`MAX_BODY_CORNERS`]
+/// is refused before the rest of it is read.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case")]
 pub enum Shape {
     /// A box of `size` `[x, y, z]` (Baumgart's MKCUBE).
     Box {
@@ -90,8 +114,7 @@ pub enum Shape {
         radius: f64,
         /// Height.
         height: f64,
-        /// Sides round the axis.
-        #[serde(default = "d32")]
+        /// Sides round the axis (default 32).
         segments: u32,
     },
     /// A cone of `segments` sides.
@@ -100,19 +123,16 @@ pub enum Shape {
         radius: f64,
         /// Height.
         height: f64,
-        /// Sides round the axis.
-        #[serde(default = "d32")]
+        /// Sides round the axis (default 32).
         segments: u32,
     },
     /// A UV sphere.
     Sphere {
         /// Radius.
         radius: f64,
-        /// Meridians.
-        #[serde(default = "d32")]
+        /// Meridians (default 32).
         segments: u32,
-        /// Parallels (bands from pole to pole).
-        #[serde(default = "d16")]
+        /// Parallels, bands from pole to pole (default 16).
         rings: u32,
     },
     /// A torus about the z axis.
@@ -121,11 +141,9 @@ pub enum Shape {
         major_radius: f64,
         /// The tube's radius.
         minor_radius: f64,
-        /// Steps round the axis.
-        #[serde(default = "d32")]
+        /// Steps round the axis (default 32).
         segments: u32,
-        /// Steps round the tube.
-        #[serde(default = "d16")]
+        /// Steps round the tube (default 16).
         rings: u32,
     },
     /// A closed polyhedron from vertex and face lists; each face lists vertex indices
@@ -134,12 +152,11 @@ pub enum Shape {
         /// Vertex loci.
         vertices: Vec<[f64; 3]>,
         /// Faces as vertex indices.
-        faces: Vec<Vec<u32>>,
+        faces: FaceList,
     },
     /// MKBFV: one face and one vertex, the seed of an Euler construction.
     Seminal {
-        /// The vertex locus.
-        #[serde(default)]
+        /// The vertex locus (default the origin).
         position: [f64; 3],
     },
 }

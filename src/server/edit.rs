@@ -24,8 +24,7 @@ use crate::model::{
     VertexId, World, WorldError,
 };
 
-/// The most faces a body made by one request may have.
-pub const MAX_BODY_FACES: usize = 2_000_000;
+pub use super::dto::MAX_BODY_FACES;
 
 /// One write to the world.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -371,7 +370,8 @@ fn build(shape: &Shape, s: &mut crate::model::Serials) -> Result<Body, EditError
         )?,
         Shape::Polyhedron { vertices, faces } => {
             let pos: Vec<DVec3> = vertices.iter().map(|&v| DVec3::from_array(v)).collect();
-            Body::from_polygons(s, &pos, faces)?
+            let faces: Vec<&[u32]> = faces.iter().collect();
+            Body::from_polygons(s, &pos, &faces)?
         }
         Shape::Seminal { position } => Body::seminal(s, finite3("position", *position)?).0,
     })

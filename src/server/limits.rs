@@ -167,6 +167,44 @@ fn too_large_decoded(bytes: u64, limits: &ImageLimits) -> ImageError {
     }
 }
 
+/// The bytes from a PNG file's start to the end of its header chunk (IHDR): the
+/// signature, the chunk's length and type, its 13 bytes of data and its checksum.
+pub const PNG_HEADER_BYTES: usize = 8 + 4 + 4 + 13 + 4;
+
+/// The width and height a PNG file's header claims, read from its first
+/// [`PNG_HEADER_BYTES`] bytes (more may be given; they are not looked at). Nothing is
+/// decoded or allocated.
+///
+/// Postcondition: on success both are between 1 and 2³¹ − 1, as the PNG specification
+/// requires, and the header's checksum is right: the decoder would read the same size.
+///
+/// # Errors
+/// [`ImageError::NotPng`] without the PNG signature; [`ImageError::Corrupt`] when the
+/// bytes are too few, the first chunk is not a 13-byte IHDR, its checksum is wrong or a
+/// side is out of range.
+pub fn png_size(bytes: &[u8]) -> Result<(u32, u32), ImageError> {
+    if !bytes.starts_with(&PNG_SIGNATURE) {
+        return Err(ImageError::NotPng);
+    }
+    let corrupt = |why: &str| ImageError::Corrupt(format!("the PNG header {why}"));
+    let Some(head) = bytes.get(..PNG_HEADER_BYTES) else {
+        return Err(corrupt("is cut short"));
+    };
+    let word = |at: usize| u32::from_be_bytes([head[at], head[at + 1], head[at + 2], head[at + 3]]);
+    if word(8) != 13 || &head[12..16] != b"IHDR" {
+        return Err(corrupt("does not start with a 13-byte IHDR chunk"));
+    }
+    if crc32fast::hash(&head[12..29]) != word(29) {
+        return Err(corrupt("fails its checksum"));
+    }
+    let (width, height) = (word(16), word(20));
+    let side = 1..=(i32::MAX as u32);
+    if !side.contains(&width) || !side.contains(&height) {
+        return Err(corrupt(&format!("claims {width}×{height} pixels")));
+    }
+    Ok((width, height))
+}
+
 /// Decodes a PNG image to 8 bits per channel, within `limits`.
 ///
 /// Order of checks, each before any further work:
@@ -301,6 +339,35 @@ mod tests {
             (p.status, p.kind),
             (StatusCode::PAYLOAD_TOO_LARGE, "too-large")
         );
+    }
+
+    /// A real PNG of `width` × `height` grey pixels.
+    fn grey_png(width: u32, height: u32) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut encoder = png::Encoder::new(&mut out, width, height);
+        encoder.set_color(ColorType::Grayscale);
+        encoder.set_depth(BitDepth::Eight);
+        encoder
+            .write_header()
+            .expect("a header")
+            .write_image_data(&vec![0; (width * height) as usize])
+            .expect("pixels");
+        out
+    }
+
+    #[test]
+    fn the_size_is_read_from_the_header_alone() {
+        let png = grey_png(7, 3);
+        assert_eq!(png_size(&png), Ok((7, 3)));
+        assert_eq!(png_size(&png[..PNG_HEADER_BYTES]), Ok((7, 3)));
+        assert!(matches!(
+            png_size(&png[..PNG_HEADER_BYTES - 1]),
+            Err(ImageError::Corrupt(_))
+        ));
+        assert_eq!(png_size(b"GIF89a"), Err(ImageError::NotPng));
+        let mut bent = png.clone();
+        bent[19] ^= 1;
+        assert!(matches!(png_size(&bent), Err(ImageError::Corrupt(_))));
     }
 
     #[test]

@@ -118,12 +118,7 @@ impl Server {
 
     /// A kilobyte figure from /proc/PID/status (`VmRSS`, `VmHWM`).
     pub fn memory_kib(&self, field: &str) -> Option<u64> {
-        let status = std::fs::read_to_string(format!("/proc/{}/status", self.pid())).ok()?;
-        status
-            .lines()
-            .find(|l| l.starts_with(field))
-            .and_then(|l| l.split_whitespace().nth(1))
-            .and_then(|n| n.parse().ok())
+        memory_kib_of(self.pid(), field)
     }
 }
 
@@ -132,6 +127,16 @@ impl Drop for Server {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// A kilobyte figure from /proc/`pid`/status (`VmRSS`, `VmHWM`), if the process is there.
+pub fn memory_kib_of(pid: u32, field: &str) -> Option<u64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    status
+        .lines()
+        .find(|l| l.starts_with(field))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|n| n.parse().ok())
 }
 
 /// Runs `winged ARGS...` to completion: its exit status and its output.

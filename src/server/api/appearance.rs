@@ -14,7 +14,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use axum::extract::rejection::{JsonRejection, PathRejection, QueryRejection};
+use axum::extract::rejection::{PathRejection, QueryRejection};
 use axum::extract::{Path, Query, State};
 use axum::http::StatusCode;
 use axum::http::header::{CONTENT_TYPE, ETAG, HeaderName, HeaderValue};
@@ -22,6 +22,7 @@ use axum::response::IntoResponse;
 use serde::{Deserialize, Serialize};
 use tokio::sync::Semaphore;
 
+use super::body::JsonBody;
 use super::precondition::etag;
 use super::{Answer, AppState, snapshot};
 use crate::camera::Camera;
@@ -277,9 +278,8 @@ pub(super) async fn camera_image(
 /// `POST /v1/appearance`.
 pub(super) async fn appearance(
     State(state): State<AppState>,
-    req: Result<axum::Json<Drawing>, JsonRejection>,
+    JsonBody(mut drawing): JsonBody<Drawing>,
 ) -> Answer {
-    let axum::Json(mut drawing) = req.map_err(|e| bad(e.body_text()))?;
     let camera = drawing
         .camera
         .take()

@@ -21,7 +21,8 @@
 //! PNG) and the camera it was taken with as far as it is known (`initial`: a stored
 //! camera's name or one inline, as `PUT /v1/cameras/{name}` takes it); the model's visible
 //! edges are aligned with the picture's edges ([`align_to_image`]) and the corrected
-//! camera answered. The picture must have the initial camera's size.
+//! camera answered. The picture must have the initial camera's size (its PNG header is
+//! compared with the camera before anything is decoded).
 //!
 //! The answer is the camera (pose and intrinsics, as `GET /v1/cameras/{name}` gives one),
 //! OpenCV's `rvec`, `tvec` and camera matrix, the RMS reprojection error of the inliers
@@ -63,7 +64,6 @@ use base64::engine::general_purpose::STANDARD as BASE64;
 use tokio::sync::OwnedSemaphorePermit;
 
 use axum::Json;
-use axum::extract::rejection::JsonRejection;
 use axum::extract::{Extension, State};
 use axum::http::StatusCode;
 use axum::http::header::ETAG;
@@ -72,6 +72,7 @@ use glam::{DMat3, DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::appearance::CameraRef;
+use super::body::JsonBody;
 use super::precondition::etag;
 use super::{Answer, AppState, snapshot};
 use crate::model::camera::{Camera, Intrinsics};
@@ -80,7 +81,9 @@ use crate::server::actor::Applied;
 use crate::server::auth::Role;
 use crate::server::dto::{CameraReq, IntrinsicsDto, PoseDto};
 use crate::server::edit::Edit;
-use crate::server::limits::{ImageLimits, decode_png};
+use crate::server::limits::{
+    ImageError, ImageLimits, Measure, PNG_HEADER_BYTES, decode_png, png_size,
+};
 use crate::server::problem::Problem;
 use crate::solve::align::{AlignOptions, align_to_image};
 use crate::solve::image::Luma;
@@ -504,9 +507,8 @@ struct Outcome {
 pub(super) async fn camera_solution(
     State(state): State<AppState>,
     role: Option<Extension<Role>>,
-    req: Result<Json<SolveReq>, JsonRejection>,
+    JsonBody(req): JsonBody<SolveReq>,
 ) -> Answer {
-    let Json(req) = req.map_err(|e| Problem::bad_request(e.body_text()))?;
     let form = req.form()?;
     if let Some(name) = &req.store_as {
         // Solving only reads the world; storing the camera writes it.
@@ -688,7 +690,10 @@ async fn from_image(
             .to_camera()
             .map_err(|e| unprocessable("invalid-camera", "Invalid camera", e.to_string()))?,
     };
-    let png = BASE64.decode(image.trim()).map_err(|e| {
+    let limits = ImageLimits::default();
+    let image = image.trim();
+    refuse_before_decoding(image, &start, &limits)?;
+    let png = BASE64.decode(image).map_err(|e| {
         Problem::new(
             StatusCode::BAD_REQUEST,
             "invalid-image",
@@ -700,7 +705,7 @@ async fn from_image(
     let appearance = state.appearance.clone();
     let started = Instant::now();
     let aligned = tokio::task::spawn_blocking(move || {
-        let decoded = decode_png(&png, &ImageLimits::default()).map_err(Problem::from)?;
+        let decoded = decode_png(&png, &limits).map_err(Problem::from)?;
         let luma = Luma::from_samples(
             decoded.width,
             decoded.height,
@@ -740,4 +745,108 @@ async fn from_image(
             inlier_fraction: aligned.inlier_fraction,
         }),
     })
+}
+
+/// The base64 characters that hold a PNG's header ([`PNG_HEADER_BYTES`], rounded up to
+/// whole groups of four characters).
+const PNG_HEADER_BASE64: usize = PNG_HEADER_BYTES.div_ceil(3) * 4;
+
+/// Refuses a picture, given as base64 text, that decoding would refuse for its size:
+/// more bytes than `limits` accept (413), or a PNG header claiming another size than
+/// `camera`'s (422 `invalid-image`, the answer alignment gives). Only the text's length
+/// and its first [`PNG_HEADER_BASE64`] characters are read, so neither the base64 nor the
+/// PNG is decoded for a picture refused here.
+///
+/// Text that is no valid base64, or no PNG, passes: the full decode refuses it and
+/// says why.
+fn refuse_before_decoding(
+    image: &str,
+    camera: &Camera,
+    limits: &ImageLimits,
+) -> Result<(), Problem> {
+    let text = image.as_bytes();
+    if text.len().is_multiple_of(4) {
+        // Valid base64 has three bytes per four characters, less its padding.
+        let padding = text.iter().rev().take(2).filter(|&&c| c == b'=').count();
+        let bytes = (text.len() / 4 * 3).saturating_sub(padding);
+        if bytes > limits.max_encoded_bytes {
+            return Err(ImageError::TooLarge {
+                what: Measure::Encoded,
+                bytes: bytes as u64,
+                limit: limits.max_encoded_bytes as u64,
+            }
+            .into());
+        }
+    }
+    let head = &text[..text.len().min(PNG_HEADER_BASE64)];
+    let Some((width, height)) = BASE64.decode(head).ok().and_then(|h| png_size(&h).ok()) else {
+        return Ok(());
+    };
+    let k = camera.intrinsics;
+    if (width, height) != (k.width, k.height) {
+        return Err(solve_problem(SolveError::ImageSizeMismatch {
+            image_width: width,
+            image_height: height,
+            camera_width: k.width,
+            camera_height: k.height,
+        }));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera(width: u32, height: u32) -> Camera {
+        let k = Intrinsics::new(width, height, 100.0, 100.0, 4.0, 2.0).expect("intrinsics");
+        Camera::look_at(DVec3::new(0.0, -5.0, 0.0), DVec3::ZERO, DVec3::Z, k).expect("a camera")
+    }
+
+    fn grey_png(width: u32, height: u32) -> String {
+        let mut out = Vec::new();
+        let mut encoder = png::Encoder::new(&mut out, width, height);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder
+            .write_header()
+            .expect("a header")
+            .write_image_data(&vec![0; (width * height) as usize])
+            .expect("pixels");
+        BASE64.encode(out)
+    }
+
+    #[test]
+    fn a_header_of_another_size_is_refused_and_one_of_the_same_passes() {
+        let limits = ImageLimits::default();
+        let p =
+            refuse_before_decoding(&grey_png(16, 4), &camera(8, 4), &limits).expect_err("refused");
+        assert_eq!(
+            (p.status, p.kind),
+            (StatusCode::UNPROCESSABLE_ENTITY, "invalid-image")
+        );
+        assert!(
+            p.detail.contains("16×4") && p.detail.contains("8×4"),
+            "{}",
+            p.detail
+        );
+        assert!(refuse_before_decoding(&grey_png(8, 4), &camera(8, 4), &limits).is_ok());
+        // Not base64, not a PNG, cut short: left to the decoder to name.
+        for text in ["%%%", "R0lGODlh", &grey_png(16, 4)[..20]] {
+            assert!(refuse_before_decoding(text, &camera(8, 4), &limits).is_ok());
+        }
+    }
+
+    #[test]
+    fn too_many_bytes_are_refused_from_the_text_length() {
+        let limits = ImageLimits {
+            max_encoded_bytes: 5,
+            ..ImageLimits::default()
+        };
+        // Eight characters with one of padding: five bytes, then eight more: eleven.
+        assert!(refuse_before_decoding("AAAAAAA=", &camera(8, 4), &limits).is_ok());
+        let p = refuse_before_decoding("AAAAAAAAAAAAAAA=", &camera(8, 4), &limits)
+            .expect_err("refused");
+        assert_eq!(p.status, StatusCode::PAYLOAD_TOO_LARGE);
+        assert!(p.detail.contains("11 bytes"), "{}", p.detail);
+    }
 }

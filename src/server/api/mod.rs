@@ -5,6 +5,7 @@
 //! tokens configured, a request without the role is refused before its handler runs.
 
 pub mod appearance;
+pub mod body;
 pub mod camera_solution;
 mod feed;
 mod model;
@@ -148,6 +149,9 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         )
         .fallback(not_found)
         .layer(axum::extract::Extension(HeavyReads::for_this_machine()))
+        .layer(axum::extract::Extension(body::Bodies::for_this_machine(
+            max_request_bytes,
+        )))
         .layer(DefaultBodyLimit::max(max_request_bytes))
         .with_state(state)
 }

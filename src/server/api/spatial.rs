@@ -33,13 +33,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, RwLock, RwLockWriteGuard};
 use std::time::Instant;
 
-use axum::extract::rejection::{JsonRejection, QueryRejection};
+use axum::extract::rejection::QueryRejection;
 use axum::extract::{Query, State};
 use axum::http::StatusCode;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use tokio::sync::Semaphore;
 
+use super::body::JsonBody;
 use super::{Answer, AppState, read_answer, snapshot};
 use crate::model::range::{self, QUERY_LIMIT};
 use crate::model::{BodyId, Serial, World};
@@ -656,10 +657,6 @@ fn direction(v: [f64; 3], names: &Names) -> Result<DVec3, Problem> {
 
 // ----- handlers ----------------------------------------------------------------------
 
-fn json<T>(req: Result<axum::Json<T>, JsonRejection>) -> Result<T, Problem> {
-    req.map(|axum::Json(v)| v).map_err(Problem::from)
-}
-
 fn query<T>(req: Result<Query<T>, QueryRejection>) -> Result<T, Problem> {
     req.map(|Query(v)| v).map_err(Problem::from)
 }
@@ -667,9 +664,8 @@ fn query<T>(req: Result<Query<T>, QueryRejection>) -> Result<T, Problem> {
 /// `POST /v1/spatial/sphere`.
 pub(super) async fn sphere_post(
     State(state): State<AppState>,
-    req: Result<axum::Json<SphereReq>, JsonRejection>,
+    JsonBody(r): JsonBody<SphereReq>,
 ) -> Answer {
-    let r = json(req)?;
     let q = sphere_query(
         r.center,
         r.radius,
@@ -701,9 +697,8 @@ pub(super) async fn sphere_get(
 /// `POST /v1/spatial/box`.
 pub(super) async fn box_post(
     State(state): State<AppState>,
-    req: Result<axum::Json<BoxReq>, JsonRejection>,
+    JsonBody(r): JsonBody<BoxReq>,
 ) -> Answer {
-    let r = json(req)?;
     let q = box_query(r.min, r.max, r.detail, r.max_features, &JSON_NAMES)?;
     run(&state, move |s, inline| s.aabb(&inline_box(q, inline))).await
 }
@@ -727,9 +722,8 @@ pub(super) async fn box_get(
 /// `POST /v1/spatial/nearest`.
 pub(super) async fn nearest_post(
     State(state): State<AppState>,
-    req: Result<axum::Json<NearestReq>, JsonRejection>,
+    JsonBody(r): JsonBody<NearestReq>,
 ) -> Answer {
-    let r = json(req)?;
     let p = point(r.point, "point")?;
     let d = max_distance(r.max_distance)?;
     run(&state, move |s, _| s.nearest(p, d)).await
@@ -749,9 +743,8 @@ pub(super) async fn nearest_get(
 /// `POST /v1/spatial/ray`.
 pub(super) async fn ray_post(
     State(state): State<AppState>,
-    req: Result<axum::Json<RayReq>, JsonRejection>,
+    JsonBody(r): JsonBody<RayReq>,
 ) -> Answer {
-    let r = json(req)?;
     let o = point(r.origin, "origin")?;
     let d = direction(r.direction, &JSON_NAMES)?;
     let m = max_distance(r.max_distance)?;
