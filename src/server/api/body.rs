@@ -20,6 +20,7 @@
 //! malformed bodies are as before; a list refused for its length while it was read
 //! (see [`crate::server::dto::bounded`]) is answered 413 `too-large`.
 
+use super::whole_numbers::whole_numbers;
 use std::sync::Arc;
 
 use axum::body::Body;
@@ -227,13 +228,15 @@ fn exceeded_problem(e: Exceeded) -> Problem {
     )
 }
 
-/// `bytes` parsed as one JSON value of type `T`.
+/// `bytes` parsed as one JSON value of type `T`, whole numbers written `2.0` read as
+/// integers (see [`whole_numbers`]).
 ///
 /// # Errors
 /// 413 `too-large` when a bounded list in `T` went past its bound; otherwise the problem
 /// axum's JSON reader answers (400 for malformed JSON or a value that is no `T`).
 pub fn from_json<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, Problem> {
-    match watch(|| axum::Json::<T>::from_bytes(bytes)) {
+    let bytes = whole_numbers(bytes);
+    match watch(|| axum::Json::<T>::from_bytes(&bytes)) {
         (Ok(axum::Json(value)), _) => Ok(value),
         (Err(_), Some(exceeded)) => Err(exceeded_problem(exceeded)),
         (Err(rejection), None) => Err(Problem::from(rejection)),
