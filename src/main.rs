@@ -97,6 +97,41 @@ struct ServeArgs {
     /// The largest image appearance draws, in pixels (width × height).
     #[arg(long, default_value_t = 4096 * 4096)]
     max_render_pixels: u64,
+    /// Seconds a request line and headers may take to arrive (from accept for a
+    /// connection's first request, from its first byte for later ones); a connection
+    /// still short of a complete head then is closed.
+    #[arg(long, value_name = "SECS", default_value = "10", value_parser = seconds)]
+    header_timeout: Duration,
+    /// Seconds a kept-alive connection may wait with no request in flight before it is
+    /// closed (an open event stream is in flight).
+    #[arg(long, value_name = "SECS", default_value = "60", value_parser = seconds)]
+    idle_timeout: Duration,
+    /// Connections served at once, lowered to fit the open-file limit (RLIMIT_NOFILE less
+    /// 64 descriptors). Past it the longest idle connection is closed, or if none is idle
+    /// the new one is answered 503 with Retry-After.
+    #[arg(long, value_name = "N", default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
+    max_connections: u32,
+    /// Seconds a stop (SIGTERM, Ctrl-C) waits for connections to finish before closing
+    /// them.
+    #[arg(long, value_name = "SECS", default_value = "10", value_parser = seconds)]
+    shutdown_deadline: Duration,
+}
+
+/// The longest timeout the flags take, a day.
+const LONGEST_TIMEOUT_SECS: f64 = 86_400.0;
+
+/// A flag's number of seconds (fractions allowed): positive, finite, at most a day.
+fn seconds(text: &str) -> Result<Duration, String> {
+    let secs: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number of seconds"))?;
+    if !(secs.is_finite() && secs > 0.0 && secs <= LONGEST_TIMEOUT_SECS) {
+        return Err(format!(
+            "{text} s: give a positive number of seconds, at most {LONGEST_TIMEOUT_SECS}"
+        ));
+    }
+    Ok(Duration::from_secs_f64(secs))
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -151,6 +186,10 @@ fn serve(args: ServeArgs) -> ExitCode {
         },
         history: args.history,
         max_render_pixels: args.max_render_pixels,
+        header_timeout: args.header_timeout,
+        idle_timeout: args.idle_timeout,
+        max_connections: usize::try_from(args.max_connections).unwrap_or(usize::MAX),
+        shutdown_deadline: args.shutdown_deadline,
     };
     let options = Options {
         limits,

@@ -10,7 +10,7 @@ use axum::Router;
 use tokio::net::TcpListener;
 use tokio::sync::oneshot;
 
-use super::{App, serve_on};
+use super::{App, listen, serve_on};
 
 /// A running server. Dropping it (or [`Background::stop`]) stops it gracefully: event
 /// streams end, requests in flight are answered, the world's owner closes its journal.
@@ -36,14 +36,14 @@ impl Background {
         })
     }
 
-    /// Binds `addr` and serves a plain router (no world of its own).
+    /// Binds `addr` and serves a plain router (no world of its own) within the default
+    /// connection limits.
     pub fn router(addr: SocketAddr, router: Router) -> io::Result<Background> {
         Self::spawn(addr, move |listener, stop| async move {
-            axum::serve(listener, router)
-                .with_graceful_shutdown(async move {
-                    let _ = stop.await;
-                })
-                .await
+            listen::serve(listener, router, listen::Settings::default(), async move {
+                let _ = stop.await;
+            })
+            .await
         })
     }
 

@@ -106,6 +106,8 @@ pub struct Metrics {
     commit_duration: Histogram,
     batch_entries: Histogram,
     overload_rejections: Counter,
+    connections_open: Gauge,
+    connections_refused: Counter,
     world_revision: Gauge,
     world_bodies: Gauge,
     world_faces: Gauge,
@@ -179,6 +181,18 @@ impl Metrics {
             "Requests refused because the world's owner was overloaded",
             overload_rejections.clone(),
         );
+        let connections_open = Gauge::default();
+        registry.register(
+            "winged_http_connections_open",
+            "HTTP connections open",
+            connections_open.clone(),
+        );
+        let connections_refused = Counter::default();
+        registry.register(
+            "winged_http_connections_refused",
+            "HTTP connections answered 503 and closed because every place under the connection cap was busy",
+            connections_refused.clone(),
+        );
         let world = |registry: &mut Registry, name: &str, help: &str| {
             let g = Gauge::default();
             registry.register(name, help, g.clone());
@@ -237,6 +251,8 @@ impl Metrics {
             commit_duration,
             batch_entries,
             overload_rejections,
+            connections_open,
+            connections_refused,
             world_revision,
             world_bodies,
             world_faces,
@@ -274,6 +290,16 @@ impl Metrics {
     /// Counts one request refused for overload.
     pub fn reject_overload(&self) {
         self.overload_rejections.inc();
+    }
+
+    /// Sets the number of open HTTP connections.
+    pub fn set_open_connections(&self, open: usize) {
+        self.connections_open.set(gauge_value(open));
+    }
+
+    /// Counts one HTTP connection refused at the connection cap.
+    pub fn refuse_connection(&self) {
+        self.connections_refused.inc();
     }
 
     /// Sets the world gauges. Values beyond `i64::MAX` are shown as `i64::MAX`.
@@ -423,6 +449,8 @@ mod tests {
         m.set_queue_depth(7);
         m.reject_overload();
         m.reject_overload();
+        m.set_open_connections(3);
+        m.refuse_connection();
         m.set_world(42, 2, 12, 24, 16);
         m.observe_snapshot(Duration::from_millis(250));
         m.observe_index_build(IndexBuild::First, Duration::from_millis(90));
@@ -437,6 +465,8 @@ mod tests {
             "# TYPE winged_journal_commit_duration_seconds histogram",
             "# TYPE winged_journal_batch_entries histogram",
             "# TYPE winged_overload_rejections counter",
+            "# TYPE winged_http_connections_open gauge",
+            "# TYPE winged_http_connections_refused counter",
             "# TYPE winged_world_revision gauge",
             "# TYPE winged_world_bodies gauge",
             "# TYPE winged_world_faces gauge",
@@ -453,6 +483,11 @@ mod tests {
         assert_eq!(
             sample(&text, "winged_overload_rejections_total "),
             Some(2.0)
+        );
+        assert_eq!(sample(&text, "winged_http_connections_open "), Some(3.0));
+        assert_eq!(
+            sample(&text, "winged_http_connections_refused_total "),
+            Some(1.0)
         );
         assert_eq!(sample(&text, "winged_world_revision "), Some(42.0));
         assert_eq!(sample(&text, "winged_world_vertices "), Some(16.0));

@@ -21,6 +21,7 @@ pub mod durable;
 pub mod edit;
 pub mod events;
 pub mod limits;
+pub mod listen;
 pub mod metrics;
 pub mod problem;
 pub mod spec;
@@ -62,6 +63,19 @@ pub struct Limits {
     pub history: usize,
     /// The largest image appearance draws, in pixels.
     pub max_render_pixels: u64,
+    /// How long a request line and headers may take to arrive, from accept for a
+    /// connection's first request and from the first byte for later ones; a connection
+    /// still short of a complete head then is closed.
+    pub header_timeout: Duration,
+    /// How long a kept-alive connection may wait with no request in flight before it is
+    /// closed (a response still streaming, such as the change stream, is in flight).
+    pub idle_timeout: Duration,
+    /// Connections served at once, lowered to fit the open-file limit (less
+    /// [`listen::RESERVED_DESCRIPTORS`]); a connection past it closes the longest idle one
+    /// or, if none is idle, is answered 503.
+    pub max_connections: usize,
+    /// How long a stop waits for connections to finish before dropping them.
+    pub shutdown_deadline: Duration,
 }
 
 impl Default for Limits {
@@ -73,6 +87,10 @@ impl Default for Limits {
             actor: ActorConfig::default(),
             history: 100_000,
             max_render_pixels: api::appearance::MAX_RENDER_PIXELS,
+            header_timeout: Duration::from_secs(10),
+            idle_timeout: Duration::from_secs(60),
+            max_connections: 1024,
+            shutdown_deadline: Duration::from_secs(10),
         }
     }
 }
@@ -108,6 +126,8 @@ pub struct App {
     /// The world owner's thread: it ends once the router (and every handle) is dropped,
     /// after the journal's final snapshot.
     pub owner: std::thread::JoinHandle<()>,
+    /// How connections are accepted, kept and ended.
+    pub connections: listen::Settings,
 }
 
 /// Builds the application over `world`, made durable by `journal`, with `recent`
@@ -143,6 +163,7 @@ pub fn build<J: Journal>(
         .on_response(DefaultOnResponse::new().level(Level::INFO))
         .on_body_chunk(())
         .on_eos(());
+    let connections = listen::Settings::new(&limits, Some(metrics.clone()));
     let in_flight = Arc::new(Semaphore::new(limits.max_in_flight.max(1)));
     let router = api::router(state, limits.max_request_bytes)
         .layer(middleware::from_fn_with_state(
@@ -156,6 +177,7 @@ pub fn build<J: Journal>(
         router,
         feed,
         owner,
+        connections,
     })
 }
 
@@ -214,8 +236,8 @@ async fn time_limit(State(limit): State<Duration>, req: Request, next: Next) -> 
     }
 }
 
-/// Binds `addr` and serves `app` until `shutdown` resolves; event streams end,
-/// in-flight requests finish, and the world's owner closes its journal first.
+/// Binds `addr` and serves `app` until `shutdown` resolves; then stops within the
+/// application's connection limits (see [`serve_on`]).
 /// Returns the bound address through `bound` as soon as it is listening.
 pub async fn serve(
     addr: SocketAddr,
@@ -228,7 +250,10 @@ pub async fn serve(
     serve_on(listener, app, shutdown).await
 }
 
-/// Serves `app` on a bound `listener` until `shutdown` resolves, as [`serve`] does.
+/// Serves `app` on a bound `listener` until `shutdown` resolves, within its connection
+/// limits ([`listen::serve`]). Then: accepting ends, event streams end, requests in flight
+/// are answered and idle connections close; connections still open after the shutdown
+/// deadline are dropped; the world's owner closes its journal last.
 pub async fn serve_on(
     listener: TcpListener,
     app: App,
@@ -238,13 +263,13 @@ pub async fn serve_on(
         router,
         feed,
         owner,
+        connections,
     } = app;
-    let served = axum::serve(listener, router)
-        .with_graceful_shutdown(async move {
-            shutdown.await;
-            feed.close();
-        })
-        .await;
+    let served = listen::serve(listener, router, connections, async move {
+        shutdown.await;
+        feed.close();
+    })
+    .await;
     // The router is gone: the owner finishes its queue, closes its journal and stops.
     let _ = tokio::task::spawn_blocking(move || owner.join()).await;
     served

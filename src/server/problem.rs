@@ -127,16 +127,33 @@ impl Problem {
     }
 }
 
-impl IntoResponse for Problem {
-    fn into_response(self) -> Response {
-        let body = Body {
+impl Problem {
+    /// The JSON body sent with content type `application/problem+json`.
+    fn body(&self) -> Body<'_> {
+        Body {
             kind: format!("urn:winged:problem:{}", self.kind),
             title: self.title,
             status: self.status.as_u16(),
             detail: &self.detail,
             revision: self.revision,
-        };
-        let mut res = (self.status, Json(body)).into_response();
+        }
+    }
+
+    /// The JSON body as bytes, for answers written outside axum (the connection layer's
+    /// own refusals, see [`super::listen`]).
+    ///
+    /// Postcondition: a JSON object with `type`, `title`, `status` and `detail` (and
+    /// `revision` when set), the same as the body of [`IntoResponse::into_response`].
+    pub fn to_json(&self) -> Vec<u8> {
+        // A struct of strings and integers always serializes; the empty fallback is never
+        // taken.
+        serde_json::to_vec(&self.body()).unwrap_or_default()
+    }
+}
+
+impl IntoResponse for Problem {
+    fn into_response(self) -> Response {
+        let mut res = (self.status, Json(self.body())).into_response();
         res.headers_mut().insert(
             header::CONTENT_TYPE,
             HeaderValue::from_static("application/problem+json"),

@@ -27,17 +27,29 @@ impl Server {
 
     /// As [`Server::start`], with extra environment variables.
     pub fn start_with_env(args: &[&str], env: &[(&str, &str)]) -> Server {
-        Self::try_start_with_env(args, env)
+        Self::start_with(args, |cmd| {
+            for (k, v) in env {
+                cmd.env(k, v);
+            }
+        })
+    }
+
+    /// As [`Server::start`], with the command adjusted by `configure` before it runs.
+    pub fn start_with(args: &[&str], configure: impl FnOnce(&mut Command)) -> Server {
+        Self::try_start_with(args, configure)
             .unwrap_or_else(|seen| panic!("the server did not start listening:\n{seen}"))
     }
 
     /// As [`Server::start`]; `Err` with the server's output when it exits (or does not
     /// listen within 60 s) instead.
     pub fn try_start(args: &[&str]) -> Result<Server, String> {
-        Self::try_start_with_env(args, &[])
+        Self::try_start_with(args, |_| {})
     }
 
-    fn try_start_with_env(args: &[&str], env: &[(&str, &str)]) -> Result<Server, String> {
+    fn try_start_with(
+        args: &[&str],
+        configure: impl FnOnce(&mut Command),
+    ) -> Result<Server, String> {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_winged"));
         cmd.arg("serve")
             .arg("--addr")
@@ -46,9 +58,7 @@ impl Server {
             .env("RUST_LOG", "info")
             .stdout(Stdio::piped())
             .stderr(Stdio::piped());
-        for (k, v) in env {
-            cmd.env(k, v);
-        }
+        configure(&mut cmd);
         let mut child = cmd.spawn().expect("the winged binary starts");
         let stdout = child.stdout.take().expect("stdout");
         let stderr = child.stderr.take().expect("stderr");
@@ -114,6 +124,36 @@ impl Server {
         let pid = self.child.id().to_string();
         let _ = Command::new("kill").args(["-TERM", &pid]).status();
         self.child.wait().expect("the server exits")
+    }
+
+    /// Sends SIGTERM and waits at most `within` for the process to exit; its exit status,
+    /// or `None` if it is still running then.
+    pub fn terminate_within(&mut self, within: Duration) -> Option<std::process::ExitStatus> {
+        let pid = self.child.id().to_string();
+        let _ = Command::new("kill").args(["-TERM", &pid]).status();
+        let until = std::time::Instant::now() + within;
+        loop {
+            if let Ok(Some(status)) = self.child.try_wait() {
+                return Some(status);
+            }
+            if std::time::Instant::now() >= until {
+                return None;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// The next log line containing `text`, waiting at most `within`; `None` if none came.
+    pub fn log_line(&self, text: &str, within: Duration) -> Option<String> {
+        let until = std::time::Instant::now() + within;
+        loop {
+            let left = until.checked_duration_since(std::time::Instant::now())?;
+            match self.log.recv_timeout(left) {
+                Ok(line) if line.contains(text) => return Some(line),
+                Ok(_) => {}
+                Err(_) => return None,
+            }
+        }
     }
 
     /// A kilobyte figure from /proc/PID/status (`VmRSS`, `VmHWM`).
