@@ -393,8 +393,8 @@ fn bad_requests_get_problems_and_change_nothing() {
         (
             "an empty name to store as",
             with(json!({"store_as": ""})),
-            400,
-            "bad-request",
+            422,
+            "invalid-name",
         ),
         (
             "an unknown field",

@@ -1154,14 +1154,18 @@ fn a_journal_that_ends_before_the_snapshot_is_dropped_and_appends_continue() {
     let (mut run, bodies) = plain_run(30, 24);
     // The snapshot is ahead of the journal: its last writes were never journaled.
     let mut ahead = run.world.clone();
-    let edit: Edit = serde_json::from_value(patch(
-        bodies[1],
-        json!({"pose": {"position": [0.0, 0.0, 9.0]}}),
-    ))
-    .unwrap();
-    for _ in 0..3 {
-        apply(&mut ahead, &edit).unwrap();
+    // Each a move to another place: a patch that changes nothing is no revision.
+    let lift = |z: f64| -> Edit {
+        serde_json::from_value(patch(
+            bodies[1],
+            json!({"pose": {"position": [0.0, 0.0, z]}}),
+        ))
+        .unwrap()
+    };
+    for z in [9.0, 10.0, 11.0] {
+        apply(&mut ahead, &lift(z)).unwrap();
     }
+    let edit = lift(12.0);
     write_snapshot(run.dir.path(), &ahead).unwrap();
     run.close();
     let mut store = Store::open(run.dir.path(), options()).unwrap();
