@@ -169,12 +169,17 @@ impl Drawing {
             Format::Svg => self.mode == Mode::Hidden,
         };
         if !format_ok {
-            return Err(bad(format!(
-                "format {:?} is not available for mode {}: json is for hidden and ids, \
+            return Err(Problem::new(
+                StatusCode::UNPROCESSABLE_ENTITY,
+                "render-refused",
+                "Cannot draw this",
+                format!(
+                    "format {:?} is not available for mode {}: json is for hidden and ids, \
                  svg for hidden, png for every mode",
-                self.format,
-                self.mode.name()
-            )));
+                    self.format,
+                    self.mode.name()
+                ),
+            ));
         }
         let camera = resize(camera, self.width, self.height)?;
         let k = camera.intrinsics;
