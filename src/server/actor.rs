@@ -80,7 +80,7 @@ pub struct Checkpoint {
     /// The world revision it holds.
     pub revision: u64,
     /// Its file.
-    pub path: Option<String>,
+    pub path: String,
     /// Its size.
     pub bytes: u64,
     /// Time taken.

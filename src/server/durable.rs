@@ -237,7 +237,7 @@ impl Journal for Durable {
         self.written(&w);
         Ok(Checkpoint {
             revision: w.revision,
-            path: Some(w.path.display().to_string()),
+            path: w.path.display().to_string(),
             bytes: w.bytes,
             seconds: started.elapsed().as_secs_f64(),
         })
