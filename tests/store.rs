@@ -1321,3 +1321,145 @@ proptest::proptest! {
         }
     }
 }
+
+// ------------------------------------------------------------------ a journal of an older format
+
+/// Where the fixture journal lives: a data directory written by the journal format of
+/// 2026-11 (entries are the HTTP request types, tagged by `edit`), with the world it
+/// must recover to.
+const FIXTURE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/fixtures/journal-2026-11"
+);
+
+/// The world as plain data, spelled with nothing but the kernel's accessors: every body
+/// (name, supart, parts, pose and colour; each vertex's serial and exact locus; each
+/// edge's serial, ends, faces and wings; each face's serial and vertex cycle), every
+/// camera and light, the revision and the next serial. Two worlds with the same
+/// fixture form are the same world to every reader.
+fn fixture_form(w: &World) -> Value {
+    let bits = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{:016x}", x.to_bits()))
+            .collect::<Vec<_>>()
+    };
+    let bodies: Vec<Value> = w
+        .tree()
+        .iter()
+        .map(|(id, n)| {
+            let b = &n.body;
+            let vs = |v| b.vertex_serial(v).get();
+            let es = |e| b.edge_serial(e).get();
+            let fs = |f| b.face_serial(f).get();
+            let mut vertices: Vec<Value> = b
+                .vertices()
+                .map(|v| json!([vs(v), bits(&b.position(v).to_array())]))
+                .collect();
+            let mut edges: Vec<Value> = b
+                .edges()
+                .map(|e| {
+                    let d = b.edge(e);
+                    json!([
+                        es(e),
+                        vs(d.nvt()),
+                        vs(d.pvt()),
+                        fs(d.nface()),
+                        fs(d.pface()),
+                        es(d.ncw()),
+                        es(d.pcw()),
+                        es(d.nccw()),
+                        es(d.pccw())
+                    ])
+                })
+                .collect();
+            let mut faces: Vec<Value> = b
+                .faces()
+                .map(|f| json!([fs(f), b.face_vertices(f).map(vs).collect::<Vec<_>>()]))
+                .collect();
+            let key = |v: &Value| v[0].as_u64().unwrap_or(0);
+            vertices.sort_by_key(key);
+            edges.sort_by_key(key);
+            faces.sort_by_key(key);
+            json!({
+                "id": id.get(),
+                "name": n.name,
+                "supart": n.supart.get(),
+                "parts": n.parts.iter().map(|p| p.get()).collect::<Vec<_>>(),
+                "pose": [bits(&n.pose.position.to_array()), bits(&n.pose.rotation.to_array())],
+                "color": n.color.map(|c| c.0),
+                "vertices": vertices,
+                "edges": edges,
+                "faces": faces,
+            })
+        })
+        .collect();
+    let cameras: Vec<Value> = w
+        .cameras()
+        .map(|(name, c)| {
+            let k = c.intrinsics;
+            json!({"name": name,
+                   "pose": [bits(&c.pose.position.to_array()), bits(&c.pose.rotation.to_array())],
+                   "intrinsics": [k.width, k.height, bits(&[k.fx, k.fy, k.cx, k.cy])]})
+        })
+        .collect();
+    let lights: Vec<Value> = w
+        .lights()
+        .map(|(name, l)| match l {
+            winged::model::camera::Light::Sun {
+                direction,
+                intensity,
+            } => json!({"name": name, "sun": bits(&direction.to_array()), "intensity": bits(&[*intensity])}),
+            winged::model::camera::Light::Point {
+                position,
+                intensity,
+            } => json!({"name": name, "point": bits(&position.to_array()), "intensity": bits(&[*intensity])}),
+        })
+        .collect();
+    json!({
+        "revision": w.revision(),
+        "next_serial": w.next_serial().get(),
+        "bodies": bodies,
+        "cameras": cameras,
+        "lights": lights,
+    })
+}
+
+/// Writes the fixture: `WINGED_WRITE_FIXTURE=1 cargo test --test store -- --ignored
+/// write_the_journal_fixture`. Run only to make a new fixture for a new format; the
+/// committed one must stay as it was written.
+#[test]
+#[ignore = "writes tests/fixtures; run by hand for a new journal format"]
+fn write_the_journal_fixture() {
+    assert!(
+        std::env::var_os("WINGED_WRITE_FIXTURE").is_some(),
+        "set WINGED_WRITE_FIXTURE=1 to overwrite the committed fixture"
+    );
+    let mut run = varied_run();
+    run.flush();
+    run.close();
+    let out = Path::new(FIXTURE);
+    std::fs::create_dir_all(out).unwrap();
+    for name in ["journal.db", "reached"] {
+        std::fs::copy(run.dir.path().join(name), out.join(name)).unwrap();
+    }
+    let form = serde_json::to_string_pretty(&fixture_form(&run.world)).unwrap();
+    std::fs::write(out.join("world.json"), form + "\n").unwrap();
+}
+
+#[test]
+fn a_journal_of_the_2026_11_format_recovers_to_the_world_it_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["journal.db", "reached"] {
+        std::fs::copy(Path::new(FIXTURE).join(name), dir.path().join(name)).unwrap();
+    }
+    let want: Value = serde_json::from_str(
+        &std::fs::read_to_string(Path::new(FIXTURE).join("world.json")).unwrap(),
+    )
+    .unwrap();
+    let mut store = Store::open(dir.path(), options()).unwrap();
+    let rec = store.recover(|_, _, _, _| {}).unwrap();
+    assert_eq!(rec.snapshot, None, "the fixture is a journal alone");
+    assert!(rec.replayed > 100, "{} entries", rec.replayed);
+    assert_eq!(fixture_form(&rec.world), want);
+    check_world(&rec.world).unwrap();
+}
