@@ -4,6 +4,27 @@
 //! as a library on its own. [`camera`] projects and clips for a camera; [`render`] draws
 //! what the world looks like from one. [`server`] serves it over HTTP/JSON; [`store`] makes it
 //! durable (a journal of applied edits plus snapshots).
+//!
+//! # Layers
+//!
+//! A module imports only from the layers below its own; `tests/layers.rs` fails on any
+//! other import.
+//!
+//! | layer | may use |
+//! |---|---|
+//! | [`model`]: the kernel | — |
+//! | [`spatial`]: the index and its queries | model |
+//! | `edit`: the command language, versioned for the journal, and `apply` | model |
+//! | [`store`]: journal and snapshots | model, edit |
+//! | `mesh`: file formats | model |
+//! | [`camera`]: projection and clipping | model |
+//! | [`render`]: appearance | model, spatial, camera |
+//! | [`solve`] (becoming `vision`): image analysis and camera solution | model, spatial, camera, render |
+//! | [`server`]: the owner, HTTP, events, auth, metrics | everything below |
+//!
+//! `edit`, `mesh` and `vision` are to come. Until `edit` has its own folder, the journal's
+//! command language lives in `server/edit.rs`, and `store` reaches up to it: the one
+//! upward import the guard still lets through, by name.
 
 pub mod camera;
 pub mod model;
