@@ -17,10 +17,10 @@ use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use tokio::runtime::Runtime;
+use winged::edit::Edit;
 use winged::model::World;
 use winged::server::actor::{self, Handle};
 use winged::server::dto::{CreateBody, EulerOp, FrameDto, Shape, TransformOp, TransformReq};
-use winged::server::edit::Edit;
 
 /// Requesters in the concurrent benchmarks (as many as HTTP connections in the wrk run).
 const TASKS: u64 = 64;

@@ -9,8 +9,8 @@
 use std::time::Instant;
 
 use serde_json::json;
+use winged::edit::{Edit, apply};
 use winged::model::World;
-use winged::server::edit::{Edit, apply};
 use winged::store::marker::{Marker, Reached};
 use winged::store::{Durability, Store, StoreOptions};
 

@@ -17,12 +17,12 @@
 use std::path::Path;
 use std::time::Instant;
 
+use winged::edit::{Edit, apply};
 use winged::model::{BodyId, Serial, World};
 use winged::server::dto::{
     CameraReq, CreateBody, EulerOp, FrameDto, IntrinsicsDto, LookAtDto, PatchBody, PoseDto, Shape,
     TransformOp, TransformReq,
 };
-use winged::server::edit::{Edit, apply};
 use winged::store::{Durability, Store, StoreOptions, snapshot};
 
 /// Bodies made before the mix of changes starts.
@@ -137,10 +137,7 @@ struct Builder {
 
 impl Builder {
     /// Applies `edit` (it must be accepted) and queues it for the journal.
-    fn push(
-        &mut self,
-        edit: Edit,
-    ) -> Result<winged::server::edit::Outcome, Box<dyn std::error::Error>> {
+    fn push(&mut self, edit: Edit) -> Result<winged::edit::Outcome, Box<dyn std::error::Error>> {
         let outcome = apply(&mut self.world, &edit)?;
         self.pending.push((self.world.revision(), edit));
         if self.pending.len() == BATCH {

@@ -14,7 +14,7 @@
 //! |---|---|
 //! | [`model`]: the kernel | — |
 //! | [`spatial`]: the index and its queries | model |
-//! | `edit`: the command language, versioned for the journal, and `apply` | model |
+//! | [`edit`]: the command language, in the journal's serde form, and `apply` | model |
 //! | [`store`]: journal and snapshots | model, edit |
 //! | `mesh`: file formats | model |
 //! | [`camera`]: projection and clipping | model |
@@ -22,11 +22,10 @@
 //! | [`solve`] (becoming `vision`): image analysis and camera solution | model, spatial, camera, render |
 //! | [`server`]: the owner, HTTP, events, auth, metrics | everything below |
 //!
-//! `edit`, `mesh` and `vision` are to come. Until `edit` has its own folder, the journal's
-//! command language lives in `server/edit.rs`, and `store` reaches up to it: the one
-//! upward import the guard still lets through, by name.
+//! `mesh` and `vision` are to come.
 
 pub mod camera;
+pub mod edit;
 pub mod model;
 pub mod render;
 pub mod server;

@@ -25,16 +25,6 @@ const LAYERS: &[(&str, &[&str])] = &[
     ),
 ];
 
-/// Upward imports that exist today and are on their way out, as `file → layer`: the
-/// journal's command language still lives in `server/edit.rs` until it moves to its own
-/// `edit/` layer. The guard fails on any other, and on any of these once it is gone.
-const KNOWN: &[&str] = &[
-    "src/store/error.rs → server",
-    "src/store/journal.rs → server",
-    "src/store/mod.rs → server",
-    "src/store/recover.rs → server",
-];
-
 /// The `.rs` files below `dir`, recursively.
 fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
@@ -120,21 +110,9 @@ fn upward_imports(src: &Path) -> Vec<String> {
 fn every_layer_imports_only_from_the_layers_below_it() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let found = upward_imports(&src);
-    let unknown: Vec<&String> = found
-        .iter()
-        .filter(|f| !KNOWN.contains(&f.as_str()))
-        .collect();
     assert!(
-        unknown.is_empty(),
-        "imports from a layer above (see LAYERS in tests/layers.rs and DESIGN.md): {unknown:#?}"
-    );
-    let gone: Vec<&&str> = KNOWN
-        .iter()
-        .filter(|k| !found.iter().any(|f| f == *k))
-        .collect();
-    assert!(
-        gone.is_empty(),
-        "these upward imports are gone; take them out of KNOWN: {gone:?}"
+        found.is_empty(),
+        "imports from a layer above (see LAYERS in tests/layers.rs and DESIGN.md): {found:#?}"
     );
 }
 

@@ -10,8 +10,8 @@ use std::path::Path;
 use glam::DVec3;
 use serde_json::{Value, json};
 use tempfile::TempDir;
+use winged::edit::{Edit, EditError, Outcome, apply};
 use winged::model::{Body, BodyId, Serial, World, check_solid, check_topology};
-use winged::server::edit::{Edit, EditError, Outcome, apply};
 use winged::store::{
     Durability, SnapshotError, Store, StoreError, StoreOptions, check_world, read_snapshot,
     snapshot, write_snapshot,

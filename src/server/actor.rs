@@ -23,8 +23,8 @@ use std::time::{Duration, Instant};
 use tokio::sync::{mpsc, oneshot};
 
 use super::changes::{self, Change};
-use super::edit::{Edit, EditError, Outcome, apply};
 use super::events::Feed;
+use crate::edit::{Edit, EditError, Outcome, apply};
 use crate::model::World;
 
 /// How many requests may wait for the owner by default.

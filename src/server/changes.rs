@@ -13,7 +13,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::dto::TransformOp;
-use super::edit::{Edit, Outcome};
+use crate::edit::{Edit, Outcome};
 use crate::model::{BodyId, Serial, World};
 
 /// What one applied write changed.

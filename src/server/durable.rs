@@ -184,7 +184,7 @@ impl Journal for Durable {
             .iter()
             .map(|e| serde_json::to_string(e.change).ok())
             .collect();
-        let batch: Vec<(u64, &super::edit::Edit, Option<&str>)> = entries
+        let batch: Vec<(u64, &crate::edit::Edit, Option<&str>)> = entries
             .iter()
             .zip(&changes)
             .map(|(e, c)| (e.revision, e.edit, c.as_deref()))

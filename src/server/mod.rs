@@ -18,13 +18,15 @@ pub mod changes;
 pub mod demo;
 pub mod dto;
 pub mod durable;
-pub mod edit;
 pub mod events;
 pub mod limits;
 pub mod listen;
 pub mod metrics;
 pub mod problem;
 pub mod spec;
+
+/// The edit language, where the handlers and the owner have always found it.
+pub use crate::edit;
 
 use std::net::SocketAddr;
 use std::sync::Arc;

@@ -7,7 +7,7 @@ use axum::response::{IntoResponse, Response};
 use serde::Serialize;
 
 use super::actor::WriteError;
-use super::edit::EditError;
+use crate::edit::EditError;
 use crate::model::WorldError;
 
 /// A problem answer: HTTP status, a stable type slug, a title and a detail.

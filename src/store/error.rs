@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use crate::server::edit::EditError;
+use crate::edit::EditError;
 
 /// A store operation that failed. Each variant names the file involved, so the message
 /// alone tells an operator where to look (a full disk, a permission, a damaged file).

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use rusqlite::types::ValueRef;
 use rusqlite::{Connection, ErrorCode, OpenFlags, OptionalExtension, TransactionBehavior};
 
-use crate::server::edit::Edit;
+use crate::edit::Edit;
 
 use super::error::StoreError;
 use super::{Durability, StoreOptions};

@@ -12,7 +12,7 @@
 //! on any thread, it writes a [`write_snapshot`] of a cloned world and then calls
 //! [`Store::prune_through`] with the [`SnapshotWritten::oldest_kept`] revision. On
 //! start, [`Store::recover`] loads the newest snapshot that passes its checks and
-//! replays the journal entries after it through [`apply`](crate::server::edit::apply),
+//! replays the journal entries after it through [`apply`](fn@crate::edit::apply),
 //! which rebuilds the same world with the same ids because every serial comes from the
 //! world's own counter.
 //!
@@ -41,8 +41,8 @@ pub use snapshot::{
     SnapshotError, SnapshotFile, SnapshotWritten, check_world, read_snapshot, write_snapshot,
 };
 
+use crate::edit::{Edit, Outcome};
 use crate::model::{Serial, World};
-use crate::server::edit::{Edit, Outcome};
 use journal::Journal;
 use marker::{Found, Marker, Reached};
 

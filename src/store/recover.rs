@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::time::{Duration, Instant};
 
+use crate::edit::{Edit, Outcome, apply};
 use crate::model::World;
-use crate::server::edit::{Edit, Outcome, apply};
 
 use super::error::StoreError;
 use super::journal::{self, Journal};

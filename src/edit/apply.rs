@@ -10,7 +10,7 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::dto::{
+use super::command::{
     CameraReq, CameraReqError, CreateBody, EulerOp, FrameDto, LightDto, PatchBody, Shape,
     SweepKind, SweepReq, TransformOp, TransformReq, points2,
 };
@@ -24,7 +24,7 @@ use crate::model::{
     VertexId, World, WorldError,
 };
 
-pub use super::dto::MAX_BODY_FACES;
+pub use super::command::MAX_BODY_FACES;
 
 /// One write to the world.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
