@@ -406,7 +406,7 @@ impl BodyShape {
     }
 
     /// Calls `visit(k)` for each face `k` of `faces`, in order, with what the tests of
-    /// the faces [`FACES_AHEAD`] to three times that further on read prefetched in
+    /// the faces `FACES_AHEAD` to three times that further on read prefetched in
     /// three stages: their records, then their corners (found through the records),
     /// then their loci and serial numbers (found through the corners). On a large
     /// shape out of cache each face's misses then overlap the tests of the faces before
