@@ -12,7 +12,7 @@ use serde_json::json;
 use winged::edit::{Edit, apply};
 use winged::model::World;
 use winged::store::marker::{Marker, Reached};
-use winged::store::{Durability, Store, StoreOptions};
+use winged::store::{Durability, Entry, Store, StoreOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let commits: u64 = std::env::args()
@@ -30,7 +30,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         json!({"edit": "create_body", "name": "b", "shape": {"type": "box", "size": [1, 1, 1]}}),
     )?;
     apply(&mut world, &create)?;
-    store.append(&[(world.revision(), &create)], world.next_serial())?;
+    store.append(
+        &[Entry::new(world.revision(), &create)],
+        world.next_serial(),
+    )?;
     let body = world.bodies().map(|(id, _)| id.get()).max().unwrap_or(2);
 
     let started = Instant::now();
@@ -38,7 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let edit: Edit = serde_json::from_value(json!({"edit": "patch_body", "body": body,
             "patch": {"pose": {"position": [i as f64 + 1.0, 0, 0], "rotation": [0, 0, 0, 1]}}}))?;
         apply(&mut world, &edit)?;
-        store.append(&[(world.revision(), &edit)], world.next_serial())?;
+        store.append(&[Entry::new(world.revision(), &edit)], world.next_serial())?;
     }
     let with_marker = started.elapsed().as_secs_f64();
 

@@ -23,7 +23,7 @@ use winged::server::dto::{
     CameraReq, CreateBody, EulerOp, FrameDto, IntrinsicsDto, LookAtDto, PatchBody, PoseDto, Shape,
     TransformOp, TransformReq,
 };
-use winged::store::{Durability, Store, StoreOptions, snapshot};
+use winged::store::{Durability, Entry, Store, StoreOptions, snapshot};
 
 /// Bodies made before the mix of changes starts.
 const BODIES: usize = 300;
@@ -147,7 +147,11 @@ impl Builder {
     }
 
     fn flush(&mut self) -> Result<(), winged::store::StoreError> {
-        let batch: Vec<(u64, &Edit)> = self.pending.iter().map(|(r, e)| (*r, e)).collect();
+        let batch: Vec<Entry<'_>> = self
+            .pending
+            .iter()
+            .map(|(r, e)| Entry::new(*r, e))
+            .collect();
         self.store.append(&batch, self.world.next_serial())?;
         self.pending.clear();
         Ok(())

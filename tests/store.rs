@@ -13,7 +13,7 @@ use tempfile::TempDir;
 use winged::edit::{Edit, EditError, Outcome, apply};
 use winged::model::{Body, BodyId, Serial, World, check_solid, check_topology};
 use winged::store::{
-    Durability, SnapshotError, Store, StoreError, StoreOptions, check_world, read_snapshot,
+    Durability, Entry, SnapshotError, Store, StoreError, StoreOptions, check_world, read_snapshot,
     snapshot, write_snapshot,
 };
 
@@ -33,6 +33,11 @@ struct Run {
     log: Vec<(u64, Edit, Outcome)>,
     batches: usize,
     refused: usize,
+}
+
+/// Journal entries without change descriptions, from `(revision, edit)` pairs.
+fn as_entries<'a>(list: &[(u64, &'a Edit)]) -> Vec<Entry<'a>> {
+    list.iter().map(|&(r, e)| Entry::new(r, e)).collect()
 }
 
 /// Batch sizes cycled through, as a server groups concurrent writes.
@@ -131,7 +136,9 @@ impl Run {
             .store
             .get_or_insert_with(|| Store::open(dir, options()).unwrap());
         let batch: Vec<(u64, &Edit)> = self.pending.iter().map(|(r, e)| (*r, e)).collect();
-        store.append(&batch, self.world.next_serial()).unwrap();
+        store
+            .append(&as_entries(&batch), self.world.next_serial())
+            .unwrap();
         self.pending.clear();
         self.batches += 1;
         if self.world.revision() > 0 {
@@ -638,7 +645,10 @@ fn a_journaled_edit_sequence_replays_to_the_same_world_entity_by_entity() {
         assert_eq!(a, b);
         assert!(a.id.is_some());
         store
-            .append(&[(recovered.revision(), &edit)], recovered.next_serial())
+            .append(
+                &[Entry::new(recovered.revision(), &edit)],
+                recovered.next_serial(),
+            )
             .unwrap();
     }
     assert_same_world(&run.world, &recovered);
@@ -989,7 +999,7 @@ fn a_failed_append_leaves_none_of_its_batch() {
     let entries: Vec<(u64, &Edit)> = batch.iter().map(|(r, e)| (*r, e)).collect();
     let err = run
         .store()
-        .append(&entries, world.next_serial())
+        .append(&as_entries(&entries), world.next_serial())
         .unwrap_err();
     assert!(matches!(err, StoreError::Sqlite { .. }), "{err:?}");
     assert!(err.to_string().contains("refused by test"), "{err}");
@@ -1004,7 +1014,9 @@ fn a_failed_append_leaves_none_of_its_batch() {
     assert_eq!(run.store().last_revision(), Some(last));
     // Once the cause is gone the same batch goes in.
     conn.execute_batch("DROP TRIGGER fail").unwrap();
-    run.store().append(&entries, world.next_serial()).unwrap();
+    run.store()
+        .append(&as_entries(&entries), world.next_serial())
+        .unwrap();
     assert_eq!(run.store().last_revision(), Some(last + 5));
     run.close();
     run.close();
@@ -1032,7 +1044,7 @@ fn appends_must_continue_the_journal() {
         ),
     ] {
         let next_serial = run.world.next_serial();
-        match run.store().append(&entries, next_serial) {
+        match run.store().append(&as_entries(&entries), next_serial) {
             Err(StoreError::OutOfOrder {
                 expected: e,
                 found: f,
@@ -1100,7 +1112,7 @@ fn a_fresh_directory_is_seeded_by_a_snapshot_and_journaling_continues_from_it() 
     .unwrap();
     apply(&mut world, &edit).unwrap();
     store
-        .append(&[(world.revision(), &edit)], world.next_serial())
+        .append(&[Entry::new(world.revision(), &edit)], world.next_serial())
         .unwrap();
     assert_eq!(store.journal_len(), 1);
     drop(store);
@@ -1175,7 +1187,7 @@ fn a_journal_that_ends_before_the_snapshot_is_dropped_and_appends_continue() {
     let mut world = rec.world;
     apply(&mut world, &edit).unwrap();
     store
-        .append(&[(world.revision(), &edit)], world.next_serial())
+        .append(&[Entry::new(world.revision(), &edit)], world.next_serial())
         .unwrap();
     drop(store);
     let mut store = Store::open(run.dir.path(), options()).unwrap();

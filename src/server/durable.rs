@@ -184,12 +184,12 @@ impl Journal for Durable {
             .iter()
             .map(|e| serde_json::to_string(e.change).ok())
             .collect();
-        let batch: Vec<(u64, &crate::edit::Edit, Option<&str>)> = entries
+        let batch: Vec<crate::store::Entry<'_>> = entries
             .iter()
             .zip(&changes)
-            .map(|(e, c)| (e.revision, e.edit, c.as_deref()))
+            .map(|(e, c)| crate::store::Entry::new(e.revision, e.edit).with_change(c.as_deref()))
             .collect();
-        self.store.append_with_changes(&batch, world.next_serial())
+        self.store.append(&batch, world.next_serial())
     }
 
     fn committed(&mut self, world: &World) {

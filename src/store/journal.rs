@@ -5,7 +5,7 @@
 //! CREATE TABLE journal(revision INTEGER PRIMARY KEY, edit TEXT NOT NULL, change TEXT);
 //! ```
 //!
-//! `edit` is the JSON of a [`Edit`], so the journal reads in the `sqlite3` shell:
+//! `edit` is the JSON of a [`Edit`](crate::edit::Edit), so the journal reads in the `sqlite3` shell:
 //! `SELECT revision, edit FROM journal ORDER BY revision DESC LIMIT 10;`.
 //!
 //! A batch of entries is one transaction (group commit): after [`Journal::append`]
@@ -17,8 +17,7 @@ use std::path::{Path, PathBuf};
 use rusqlite::types::ValueRef;
 use rusqlite::{Connection, ErrorCode, OpenFlags, OptionalExtension, TransactionBehavior};
 
-use crate::edit::Edit;
-
+use super::entry::Entry;
 use super::error::StoreError;
 use super::{Durability, StoreOptions};
 
@@ -126,26 +125,17 @@ impl Journal {
         self.next = Some(revision);
     }
 
-    /// Appends `entries` in one transaction.
+    /// Appends `entries` in one transaction, each with the description of what it
+    /// changed, if any (stored as given, for [`recent_changes`] to read back after a
+    /// restart).
     ///
     /// Preconditions (checked, refused with [`StoreError::OutOfOrder`]): the revisions
     /// are consecutive, the first is the expected next one (see [`Self::expect_next`];
     /// before anything is known, any revision after the journal's last), and no other
     /// process has appended meanwhile. Postcondition on `Ok`: every entry is committed.
     /// On `Err` none is.
-    pub(crate) fn append(&mut self, entries: &[(u64, &Edit)]) -> Result<(), StoreError> {
-        let with: Vec<(u64, &Edit, Option<&str>)> =
-            entries.iter().map(|&(r, e)| (r, e, None)).collect();
-        self.append_with_changes(&with)
-    }
-
-    /// [`Self::append`], each entry with the description of what it changed (stored as
-    /// given, for [`recent_changes`] to read back after a restart).
-    pub(crate) fn append_with_changes(
-        &mut self,
-        entries: &[(u64, &Edit, Option<&str>)],
-    ) -> Result<(), StoreError> {
-        let Some(&(first, _, _)) = entries.first() else {
+    pub(crate) fn append(&mut self, entries: &[Entry<'_>]) -> Result<(), StoreError> {
+        let Some(first) = entries.first().map(|e| e.revision) else {
             return Ok(());
         };
         // Bounds every revision below by 2^63, so the sums below cannot overflow.
@@ -158,7 +148,7 @@ impl Journal {
                 found: first,
             });
         }
-        for (i, &(r, _, _)) in entries.iter().enumerate() {
+        for (i, r) in entries.iter().map(|e| e.revision).enumerate() {
             let expected = first + i as u64;
             if r != expected {
                 return Err(StoreError::OutOfOrder { expected, found: r });
@@ -188,7 +178,12 @@ impl Journal {
             let mut insert = tx
                 .prepare_cached("INSERT INTO journal(revision, edit, change) VALUES (?1, ?2, ?3)")
                 .map_err(sql("appending"))?;
-            for &(revision, edit, change) in entries {
+            for &Entry {
+                revision,
+                edit,
+                change,
+            } in entries
+            {
                 let json = serde_json::to_string(edit)
                     .map_err(|source| StoreError::Encode { revision, source })?;
                 insert

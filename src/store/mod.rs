@@ -26,6 +26,7 @@
 //! A snapshot file alone is a complete backup: copy the newest file in `snapshots/`;
 //! to restore, put it into the `snapshots/` directory of an empty data directory.
 
+mod entry;
 mod error;
 mod journal;
 pub mod marker;
@@ -35,6 +36,7 @@ pub mod snapshot;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+pub use entry::Entry;
 pub use error::StoreError;
 pub use recover::Recovered;
 pub use snapshot::{
@@ -163,10 +165,9 @@ impl Store {
         Ok(self.journal.len() == 0 && snapshot::list(&self.dir)?.is_empty())
     }
 
-    /// Journals `entries`, each an applied edit and the world revision it produced, in
-    /// ONE transaction (group commit), then records in the reached marker that the
-    /// journal reached the last entry's revision with `next_serial` as the world's next
-    /// serial.
+    /// Journals `entries` in ONE transaction (group commit), then records in the reached
+    /// marker that the journal reached the last entry's revision with `next_serial` as
+    /// the world's next serial.
     ///
     /// Preconditions, checked ([`StoreError::OutOfOrder`]): the revisions are
     /// consecutive and continue the journal (after [`Store::recover`], the first is the
@@ -174,24 +175,11 @@ impl Store {
     /// committed and the marker written, durably with [`Durability::Full`]. On `Err`
     /// (disk full, say) before the commit none of the batch is in the journal, and the
     /// same batch may be retried; an `Err` from the marker leaves the batch committed.
-    pub fn append(
-        &mut self,
-        entries: &[(u64, &Edit)],
-        next_serial: Serial,
-    ) -> Result<(), StoreError> {
+    /// An entry's change description is kept as given, and [`Store::recent_changes`]
+    /// reads it back after a restart.
+    pub fn append(&mut self, entries: &[Entry<'_>], next_serial: Serial) -> Result<(), StoreError> {
         self.journal.append(entries)?;
-        self.mark(entries.last().map(|e| e.0), next_serial)
-    }
-
-    /// [`Store::append`], each entry with a description of what it changed (text, kept
-    /// as given). [`Store::recent_changes`] reads them back after a restart.
-    pub fn append_with_changes(
-        &mut self,
-        entries: &[(u64, &Edit, Option<&str>)],
-        next_serial: Serial,
-    ) -> Result<(), StoreError> {
-        self.journal.append_with_changes(entries)?;
-        self.mark(entries.last().map(|e| e.0), next_serial)
+        self.mark(entries.last().map(|e| e.revision), next_serial)
     }
 
     /// Records a committed revision in the marker.
