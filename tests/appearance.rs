@@ -2,6 +2,7 @@
 //! numbers an image carries (depth scale, ids legend), and bad requests refused with
 //! problem+json while the world stays as it was.
 
+#[path = "support/http.rs"]
 mod support;
 
 use glam::DVec3;

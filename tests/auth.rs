@@ -2,6 +2,7 @@
 //! (401) and a token of too low a role (403) before it does anything; a read token
 //! reads; a write token writes; admin routes want an admin token.
 
+#[path = "support/http.rs"]
 mod support;
 
 use std::sync::Arc;

@@ -4,6 +4,7 @@
 //! `initial`). Broken, blank, foreign and mis-sized pictures get problem+json answers and
 //! leave the world unchanged.
 
+#[path = "support/http.rs"]
 mod support;
 
 use base64::Engine as _;

@@ -3,6 +3,7 @@
 //! vertex id and by world point, with intrinsics inline or from a stored camera, and
 //! `store_as` stores it. Bad requests get problem+json and leave the world unchanged.
 
+#[path = "support/http.rs"]
 mod support;
 
 use glam::{DMat3, DQuat, DVec2, DVec3};

@@ -2,6 +2,7 @@
 //! Revisions rise by exactly one per write, no write is lost, and every read sees a
 //! consistent body.
 
+#[path = "support/http.rs"]
 mod support;
 
 use std::sync::Arc;

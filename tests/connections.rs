@@ -4,6 +4,7 @@
 //!
 //! Time bounds here are liveness bounds with generous slack, not measurements.
 
+#[path = "support/process.rs"]
 mod process;
 
 use std::io::{ErrorKind, Read, Write};

@@ -11,6 +11,7 @@
 //!   request schemas too. Every write answers the revision after it, and refused writes
 //!   leave the revision as it was.
 
+#[path = "support/contract/mod.rs"]
 mod contract_support;
 
 use std::cell::RefCell;

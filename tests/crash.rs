@@ -3,6 +3,7 @@
 //! hold every acknowledged write, continue the revisions, never reuse an id, and pass
 //! the validator on every body. Several rounds on one directory.
 
+#[path = "support/process.rs"]
 mod process;
 
 use std::collections::BTreeMap;

@@ -5,6 +5,7 @@
 //! These tests need `bash` and `curl` (and `jq` or `python3`); they fail, never skip, when
 //! one is missing.
 
+#[path = "support/process.rs"]
 mod process;
 
 use std::path::PathBuf;

@@ -1,5 +1,6 @@
 //! Golden tests from the seeds: counts, volumes and validity of the Euler constructions.
 
+#[path = "support/kernel.rs"]
 mod common;
 
 use common::{face_towards, shift};

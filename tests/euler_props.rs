@@ -2,6 +2,7 @@
 //! invariant; each operator followed by its inverse restores the body (up to serial
 //! numbers); refused operators change nothing.
 
+#[path = "support/kernel.rs"]
 mod common;
 
 use common::{assert_valid, canon, dump};

@@ -1,6 +1,7 @@
 //! Each Euler operator's refusals (typed error, body untouched), and GLUE/UNGLUE as
 //! inverses of each other.
 
+#[path = "support/kernel.rs"]
 mod common;
 
 use common::{assert_valid, canon, canon_by_locus, dump, face_towards, shift};

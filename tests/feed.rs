@@ -1,6 +1,7 @@
 //! Following the world over real HTTP: preconditions on writes, the changes after a
 //! revision, and the Server-Sent Events stream with `Last-Event-ID` resumption.
 
+#[path = "support/http.rs"]
 mod support;
 
 use std::io::{BufRead, BufReader, Read};

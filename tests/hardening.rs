@@ -6,6 +6,7 @@
 //! refused at start (or, with `--accept-loss`, resumed past them) and never reissues an
 //! acknowledged id.
 
+#[path = "support/process.rs"]
 mod process;
 
 use std::path::{Path, PathBuf};

@@ -2,6 +2,7 @@
 //! walk-through of the seeds, every kind of error, and that a refused request changes
 //! nothing.
 
+#[path = "support/http.rs"]
 mod support;
 
 use serde_json::{Value, json};

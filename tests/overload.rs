@@ -3,6 +3,7 @@
 //! afterwards it serves normally. Also: the server refuses to start open to the network
 //! without tokens.
 
+#[path = "support/process.rs"]
 mod process;
 
 use std::sync::Arc;

@@ -1,6 +1,7 @@
 //! Perimeter access against the winged-edge figure: ECW/ECCW, FCW/FCCW, VCW/VCCW,
 //! OTHER, LINKED, WING, and the perimeter iterators.
 
+#[path = "support/kernel.rs"]
 mod common;
 
 use common::{dump, face_towards};

@@ -11,6 +11,7 @@
 //!   640×480 camera, is refused with the size mismatch without being decoded (no 256 MB
 //!   jump in resident memory).
 
+#[path = "support/process.rs"]
 mod process;
 
 use std::sync::Arc;

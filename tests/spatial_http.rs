@@ -2,6 +2,7 @@
 //! whose answers are worked out by hand; the answers follow moves and deletions with
 //! the new revision; bad requests are refused with problem+json and change nothing.
 
+#[path = "support/http.rs"]
 mod support;
 
 use serde_json::{Value, json};

@@ -3,6 +3,7 @@
 //!
 //! Real SQLite and real files in temporary directories.
 
+#[path = "support/kernel.rs"]
 mod common;
 
 use std::path::Path;

@@ -1,6 +1,7 @@
 //! TRANSLATE, ROTATE, DILATE and REFLECT of bodies, faces, edges and vertices, in body
 //! and world frames, on a lone body and through the world.
 
+#[path = "support/kernel.rs"]
 mod common;
 
 use std::f64::consts::{FRAC_PI_2, PI};

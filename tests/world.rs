@@ -1,6 +1,7 @@
 //! The world: parts tree, poses, names, kill, snapshots, revisions, glue and unglue
 //! between bodies, cameras and lights.
 
+#[path = "support/kernel.rs"]
 mod common;
 
 use std::f64::consts::{FRAC_PI_2, PI};

@@ -18,7 +18,7 @@ pub fn routes(source: &str) -> Result<Vec<(String, String)>, String> {
     for unsupported in [".route_service(", ".nest(", ".nest_service("] {
         if code.contains(unsupported) {
             return Err(format!(
-                "the router uses {unsupported}..); teach tests/contract_support/routes.rs \
+                "the router uses {unsupported}..); teach tests/support/contract/routes.rs \
                  to read it"
             ));
         }
@@ -52,7 +52,7 @@ pub fn routes(source: &str) -> Result<Vec<(String, String)>, String> {
     if code.matches(".merge(").count() != merges {
         return Err(
             "the router merges routers (.merge outside a .route call); teach \
-                    tests/contract_support/routes.rs to read it"
+                    tests/support/contract/routes.rs to read it"
                 .into(),
         );
     }
