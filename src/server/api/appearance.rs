@@ -14,15 +14,14 @@
 
 use std::sync::{Arc, Mutex};
 
-use axum::extract::rejection::{PathRejection, QueryRejection};
-use axum::extract::{Path, Query, State};
+use axum::extract::State;
 use axum::http::StatusCode;
 use axum::http::header::{CONTENT_TYPE, ETAG, HeaderName, HeaderValue};
 use axum::response::IntoResponse;
 use serde::{Deserialize, Serialize};
 use tokio::sync::Semaphore;
 
-use super::body::JsonBody;
+use super::extract::{ApiJson, ApiPath, ApiQuery};
 use super::precondition::etag;
 use super::{Answer, AppState, snapshot};
 use crate::camera::Camera;
@@ -267,11 +266,9 @@ fn resize(camera: Camera, width: Option<u32>, height: Option<u32>) -> Result<Cam
 /// `GET /v1/cameras/{name}/image?mode=&format=&width=&height=&...`.
 pub(super) async fn camera_image(
     State(state): State<AppState>,
-    name: Result<Path<String>, PathRejection>,
-    drawing: Result<Query<Drawing>, QueryRejection>,
+    ApiPath(name): ApiPath<String>,
+    ApiQuery(drawing): ApiQuery<Drawing>,
 ) -> Answer {
-    let Path(name) = name.map_err(|e| bad(e.body_text()))?;
-    let Query(drawing) = drawing.map_err(|e| bad(e.body_text()))?;
     if drawing.camera.is_some() {
         return Err(bad(
             "the camera is the one the path names; leave out camera=",
@@ -283,7 +280,7 @@ pub(super) async fn camera_image(
 /// `POST /v1/appearance`.
 pub(super) async fn appearance(
     State(state): State<AppState>,
-    JsonBody(mut drawing): JsonBody<Drawing>,
+    ApiJson(mut drawing): ApiJson<Drawing>,
 ) -> Answer {
     let camera = drawing
         .camera

@@ -24,7 +24,7 @@ use super::whole_numbers::whole_numbers;
 use std::sync::Arc;
 
 use axum::body::Body;
-use axum::extract::{FromRequest, Request};
+use axum::extract::Request;
 use axum::http::header::{CONTENT_LENGTH, CONTENT_TYPE};
 use axum::http::{HeaderMap, StatusCode};
 use futures_util::StreamExt as _;
@@ -240,27 +240,6 @@ pub fn from_json<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, Problem> {
         (Ok(axum::Json(value)), _) => Ok(value),
         (Err(_), Some(exceeded)) => Err(exceeded_problem(exceeded)),
         (Err(rejection), None) => Err(Problem::from(rejection)),
-    }
-}
-
-/// A JSON request body of type `T`, read and parsed as the module describes.
-#[derive(Debug)]
-pub struct JsonBody<T>(pub T);
-
-impl<S, T> FromRequest<S> for JsonBody<T>
-where
-    S: Send + Sync,
-    T: DeserializeOwned + Send + 'static,
-{
-    type Rejection = Problem;
-
-    async fn from_request(req: Request, _: &S) -> Result<Self, Problem> {
-        if !is_json(req.headers()) {
-            return Err(not_json());
-        }
-        Bodies::of(&req)?
-            .parse(req, |bytes| from_json(bytes).map(JsonBody))
-            .await
     }
 }
 

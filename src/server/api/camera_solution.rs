@@ -72,7 +72,7 @@ use glam::{DMat3, DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::appearance::CameraRef;
-use super::body::JsonBody;
+use super::extract::ApiJson;
 use super::precondition::etag;
 use super::{Answer, AppState, snapshot};
 use crate::model::camera::{Camera, Intrinsics};
@@ -507,7 +507,7 @@ struct Outcome {
 pub(super) async fn camera_solution(
     State(state): State<AppState>,
     role: Option<Extension<Role>>,
-    JsonBody(req): JsonBody<SolveReq>,
+    ApiJson(req): ApiJson<SolveReq>,
 ) -> Answer {
     let form = req.form()?;
     if let Some(name) = &req.store_as {

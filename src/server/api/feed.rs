@@ -3,13 +3,15 @@
 use std::sync::Arc;
 
 use axum::extract::rejection::QueryRejection;
-use axum::extract::{Query, State};
+use axum::extract::{FromRequestParts, Query, State};
 use axum::http::HeaderMap;
+use axum::http::request::Parts;
 use axum::response::sse::{KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
 use serde_json::json;
 
+use super::extract::ApiQuery;
 use super::{Answer, read_answer};
 use crate::server::events::{Feed, Since};
 use crate::server::problem::Problem;
@@ -25,18 +27,27 @@ pub(super) struct ChangesQuery {
     limit: Option<usize>,
 }
 
+/// The query read as [`ApiQuery`] reads it, with the route's form added to the 400
+/// detail.
+impl<S: Send + Sync> FromRequestParts<S> for ChangesQuery {
+    type Rejection = Problem;
+
+    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<Self, Problem> {
+        Query::from_request_parts(parts, state)
+            .await
+            .map(|Query(q)| q)
+            .map_err(|r: QueryRejection| {
+                Problem::bad_request(format!(
+                    "{}; ask as /v1/world/changes?since=REVISION[&limit=N]",
+                    r.body_text()
+                ))
+            })
+    }
+}
+
 /// `GET /v1/world/changes?since=N[&limit=L]`: every change after revision N, oldest
 /// first, or `resync: true` when N is older than the history kept.
-pub(super) async fn changes(
-    State(feed): State<Arc<Feed>>,
-    q: Result<Query<ChangesQuery>, QueryRejection>,
-) -> Answer {
-    let Query(q) = q.map_err(|r| {
-        Problem::bad_request(format!(
-            "{}; ask as /v1/world/changes?since=REVISION[&limit=N]",
-            r.body_text()
-        ))
-    })?;
+pub(super) async fn changes(State(feed): State<Arc<Feed>>, q: ChangesQuery) -> Answer {
     let limit = q.limit.unwrap_or(DEFAULT_LIMIT).clamp(1, MAX_LIMIT);
     Ok(match feed.since(q.since, limit) {
         Since::Changes {
@@ -78,9 +89,8 @@ pub(super) struct EventsQuery {
 pub(super) async fn events(
     State(feed): State<Arc<Feed>>,
     headers: HeaderMap,
-    q: Result<Query<EventsQuery>, QueryRejection>,
+    ApiQuery(q): ApiQuery<EventsQuery>,
 ) -> Result<Response, Problem> {
-    let Query(q) = q?;
     let last_event = match headers.get("last-event-id") {
         None => None,
         Some(v) => Some(

@@ -7,6 +7,7 @@
 pub mod appearance;
 pub mod body;
 pub mod camera_solution;
+pub mod extract;
 mod feed;
 mod model;
 mod ops;

@@ -1,13 +1,12 @@
 //! The model's routes: bodies, their topology and operators, cameras and lights.
 
-use axum::Json;
-use axum::extract::rejection::{JsonRejection, PathRejection, QueryRejection};
-use axum::extract::{Extension, Path, Query, State};
+use axum::extract::{Extension, State};
 use axum::http::StatusCode;
 use axum::response::IntoResponse;
 use serde::Deserialize;
 use serde_json::json;
 
+use super::extract::{ApiJson, ApiPath, ApiQuery};
 use super::precondition::{IfMatch, Unused, WriteJson};
 use super::{Answer, HeavyReads, read_answer, snapshot, world_size, write};
 use crate::model::{BodyId, Serial, World};
@@ -18,14 +17,6 @@ use crate::server::dto::{
 };
 use crate::server::edit::Edit;
 use crate::server::problem::Problem;
-
-fn id_of(p: Result<Path<u64>, PathRejection>) -> Result<u64, Problem> {
-    p.map(|Path(id)| id).map_err(Problem::from)
-}
-
-fn name_of(p: Result<Path<String>, PathRejection>) -> Result<String, Problem> {
-    p.map(|Path(n)| n).map_err(Problem::from)
-}
 
 pub(super) async fn world(State(h): State<Handle>) -> Answer {
     let w = snapshot(&h).await?;
@@ -74,9 +65,8 @@ pub(super) struct ListQuery {
 
 pub(super) async fn list_bodies(
     State(h): State<Handle>,
-    q: Result<Query<ListQuery>, QueryRejection>,
+    ApiQuery(mut q): ApiQuery<ListQuery>,
 ) -> Answer {
-    let Query(mut q) = q?;
     // A name is looked up in normalization form C, the form names are stored in; a name
     // no body can have even then is a mistake in the query, not an empty answer.
     if let Some(name) = q.name.as_mut() {
@@ -103,11 +93,7 @@ pub(super) async fn list_bodies(
     ))
 }
 
-pub(super) async fn get_body(
-    State(h): State<Handle>,
-    id: Result<Path<u64>, PathRejection>,
-) -> Answer {
-    let id = id_of(id)?;
+pub(super) async fn get_body(State(h): State<Handle>, ApiPath(id): ApiPath<u64>) -> Answer {
     let w = snapshot(&h).await?;
     let dto = body_dto(&w, BodyId(Serial(id)))
         .ok_or_else(|| Problem::not_found(format!("no body has id {id}")))?;
@@ -119,9 +105,8 @@ pub(super) async fn get_body(
 pub(super) async fn topology(
     State(h): State<Handle>,
     Extension(heavy): Extension<HeavyReads>,
-    id: Result<Path<u64>, PathRejection>,
+    ApiPath(id): ApiPath<u64>,
 ) -> Answer {
-    let id = id_of(id)?;
     // At most one heavy read per spare core at a time, so that small reads keep a core.
     let _permit = heavy
         .0
@@ -214,10 +199,10 @@ pub(super) async fn create_body(State(h): State<Handle>, req: WriteJson<CreateBo
 
 pub(super) async fn patch_body(
     State(h): State<Handle>,
-    id: Result<Path<u64>, PathRejection>,
+    ApiPath(body): ApiPath<u64>,
     req: WriteJson<PatchBody>,
 ) -> Answer {
-    let (body, patch, expected) = (id_of(id)?, req.value, req.expected);
+    let (patch, expected) = (req.value, req.expected);
     write(
         &h,
         Edit::PatchBody { body, patch },
@@ -230,84 +215,65 @@ pub(super) async fn patch_body(
 pub(super) async fn delete_body(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
-    id: Result<Path<u64>, PathRejection>,
+    ApiPath(body): ApiPath<u64>,
     _unused: Unused,
 ) -> Answer {
-    write(
-        &h,
-        Edit::DeleteBody { body: id_of(id)? },
-        expected,
-        StatusCode::OK,
-    )
-    .await
+    write(&h, Edit::DeleteBody { body }, expected, StatusCode::OK).await
 }
 
 pub(super) async fn euler(
     State(h): State<Handle>,
-    id: Result<Path<u64>, PathRejection>,
+    ApiPath(body): ApiPath<u64>,
     req: WriteJson<EulerOp>,
 ) -> Answer {
-    let (body, op, expected) = (id_of(id)?, req.value, req.expected);
+    let (op, expected) = (req.value, req.expected);
     write(&h, Edit::Euler { body, op }, expected, StatusCode::OK).await
 }
 
 pub(super) async fn transform(
     State(h): State<Handle>,
-    id: Result<Path<u64>, PathRejection>,
+    ApiPath(body): ApiPath<u64>,
     req: WriteJson<TransformReq>,
 ) -> Answer {
-    let (body, req, expected) = (id_of(id)?, req.value, req.expected);
+    let (req, expected) = (req.value, req.expected);
     write(&h, Edit::Transform { body, req }, expected, StatusCode::OK).await
 }
 
 pub(super) async fn sweep(
     State(h): State<Handle>,
-    id: Result<Path<u64>, PathRejection>,
+    ApiPath(body): ApiPath<u64>,
     req: WriteJson<SweepReq>,
 ) -> Answer {
-    let (body, req, expected) = (id_of(id)?, req.value, req.expected);
+    let (req, expected) = (req.value, req.expected);
     write(&h, Edit::Sweep { body, req }, expected, StatusCode::OK).await
 }
 
 pub(super) async fn dual(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
-    id: Result<Path<u64>, PathRejection>,
+    ApiPath(body): ApiPath<u64>,
     _unused: Unused,
 ) -> Answer {
-    write(
-        &h,
-        Edit::Dual { body: id_of(id)? },
-        expected,
-        StatusCode::OK,
-    )
-    .await
+    write(&h, Edit::Dual { body }, expected, StatusCode::OK).await
 }
 
 pub(super) async fn evert(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
-    id: Result<Path<u64>, PathRejection>,
+    ApiPath(body): ApiPath<u64>,
     _unused: Unused,
 ) -> Answer {
-    write(
-        &h,
-        Edit::Evert { body: id_of(id)? },
-        expected,
-        StatusCode::OK,
-    )
-    .await
+    write(&h, Edit::Evert { body }, expected, StatusCode::OK).await
 }
 
 pub(super) async fn copy(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
-    id: Result<Path<u64>, PathRejection>,
-    req: Result<Option<Json<CopyReq>>, JsonRejection>,
+    ApiPath(body): ApiPath<u64>,
+    req: Option<ApiJson<CopyReq>>,
 ) -> Answer {
-    let body = id_of(id)?;
     // The body is optional: none (no Content-Type) means an unnamed copy.
-    let name = req?.and_then(|Json(r)| r.name);
+    let name = req.and_then(|ApiJson(r)| r.name);
     write(&h, Edit::Copy { body, name }, expected, StatusCode::CREATED).await
 }
 
@@ -320,11 +286,7 @@ pub(super) async fn list_cameras(State(h): State<Handle>) -> Answer {
     ))
 }
 
-pub(super) async fn get_camera(
-    State(h): State<Handle>,
-    name: Result<Path<String>, PathRejection>,
-) -> Answer {
-    let name = name_of(name)?;
+pub(super) async fn get_camera(State(h): State<Handle>, ApiPath(name): ApiPath<String>) -> Answer {
     let w = snapshot(&h).await?;
     let c = w
         .camera(&name)
@@ -334,10 +296,10 @@ pub(super) async fn get_camera(
 
 pub(super) async fn put_camera(
     State(h): State<Handle>,
-    name: Result<Path<String>, PathRejection>,
+    ApiPath(name): ApiPath<String>,
     req: WriteJson<CameraReq>,
 ) -> Answer {
-    let (name, camera) = (name_of(name)?, req.value);
+    let camera = req.value;
     write(
         &h,
         Edit::PutCamera { name, camera },
@@ -350,10 +312,9 @@ pub(super) async fn put_camera(
 pub(super) async fn delete_camera(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
-    name: Result<Path<String>, PathRejection>,
+    ApiPath(name): ApiPath<String>,
     _unused: Unused,
 ) -> Answer {
-    let name = name_of(name)?;
     write(&h, Edit::DeleteCamera { name }, expected, StatusCode::OK).await
 }
 
@@ -373,11 +334,7 @@ pub(super) async fn list_lights(State(h): State<Handle>) -> Answer {
     ))
 }
 
-pub(super) async fn get_light(
-    State(h): State<Handle>,
-    name: Result<Path<String>, PathRejection>,
-) -> Answer {
-    let name = name_of(name)?;
+pub(super) async fn get_light(State(h): State<Handle>, ApiPath(name): ApiPath<String>) -> Answer {
     let w = snapshot(&h).await?;
     let l = w
         .light(&name)
@@ -389,10 +346,10 @@ pub(super) async fn get_light(
 
 pub(super) async fn put_light(
     State(h): State<Handle>,
-    name: Result<Path<String>, PathRejection>,
+    ApiPath(name): ApiPath<String>,
     req: WriteJson<LightDto>,
 ) -> Answer {
-    let (name, light) = (name_of(name)?, req.value);
+    let light = req.value;
     write(
         &h,
         Edit::PutLight { name, light },
@@ -405,9 +362,8 @@ pub(super) async fn put_light(
 pub(super) async fn delete_light(
     State(h): State<Handle>,
     IfMatch(expected): IfMatch,
-    name: Result<Path<String>, PathRejection>,
+    ApiPath(name): ApiPath<String>,
     _unused: Unused,
 ) -> Answer {
-    let name = name_of(name)?;
     write(&h, Edit::DeleteLight { name }, expected, StatusCode::OK).await
 }

@@ -33,14 +33,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, RwLock, RwLockWriteGuard};
 use std::time::Instant;
 
-use axum::extract::rejection::QueryRejection;
-use axum::extract::{Query, State};
+use axum::extract::State;
 use axum::http::StatusCode;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use tokio::sync::Semaphore;
 
-use super::body::JsonBody;
+use super::extract::{ApiJson, ApiQuery};
 use super::{Answer, AppState, read_answer, snapshot};
 use crate::model::range::{self, QUERY_LIMIT};
 use crate::model::{BodyId, Serial, World};
@@ -657,14 +656,10 @@ fn direction(v: [f64; 3], names: &Names) -> Result<DVec3, Problem> {
 
 // ----- handlers ----------------------------------------------------------------------
 
-fn query<T>(req: Result<Query<T>, QueryRejection>) -> Result<T, Problem> {
-    req.map(|Query(v)| v).map_err(Problem::from)
-}
-
 /// `POST /v1/spatial/sphere`.
 pub(super) async fn sphere_post(
     State(state): State<AppState>,
-    JsonBody(r): JsonBody<SphereReq>,
+    ApiJson(r): ApiJson<SphereReq>,
 ) -> Answer {
     let q = sphere_query(
         r.center,
@@ -680,9 +675,8 @@ pub(super) async fn sphere_post(
 /// `GET /v1/spatial/sphere`.
 pub(super) async fn sphere_get(
     State(state): State<AppState>,
-    req: Result<Query<SphereParams>, QueryRejection>,
+    ApiQuery(r): ApiQuery<SphereParams>,
 ) -> Answer {
-    let r = query(req)?;
     let q = sphere_query(
         [r.x, r.y, r.z],
         r.r,
@@ -695,10 +689,7 @@ pub(super) async fn sphere_get(
 }
 
 /// `POST /v1/spatial/box`.
-pub(super) async fn box_post(
-    State(state): State<AppState>,
-    JsonBody(r): JsonBody<BoxReq>,
-) -> Answer {
+pub(super) async fn box_post(State(state): State<AppState>, ApiJson(r): ApiJson<BoxReq>) -> Answer {
     let q = box_query(r.min, r.max, r.detail, r.max_features, &JSON_NAMES)?;
     run(&state, move |s, inline| s.aabb(&inline_box(q, inline))).await
 }
@@ -706,9 +697,8 @@ pub(super) async fn box_post(
 /// `GET /v1/spatial/box`.
 pub(super) async fn box_get(
     State(state): State<AppState>,
-    req: Result<Query<BoxParams>, QueryRejection>,
+    ApiQuery(r): ApiQuery<BoxParams>,
 ) -> Answer {
-    let r = query(req)?;
     let q = box_query(
         [r.min_x, r.min_y, r.min_z],
         [r.max_x, r.max_y, r.max_z],
@@ -722,7 +712,7 @@ pub(super) async fn box_get(
 /// `POST /v1/spatial/nearest`.
 pub(super) async fn nearest_post(
     State(state): State<AppState>,
-    JsonBody(r): JsonBody<NearestReq>,
+    ApiJson(r): ApiJson<NearestReq>,
 ) -> Answer {
     let p = point(r.point, "point")?;
     let d = max_distance(r.max_distance)?;
@@ -732,19 +722,15 @@ pub(super) async fn nearest_post(
 /// `GET /v1/spatial/nearest`.
 pub(super) async fn nearest_get(
     State(state): State<AppState>,
-    req: Result<Query<NearestParams>, QueryRejection>,
+    ApiQuery(r): ApiQuery<NearestParams>,
 ) -> Answer {
-    let r = query(req)?;
     let p = point([r.x, r.y, r.z], QUERY_NAMES.center)?;
     let d = max_distance(r.max_distance)?;
     run(&state, move |s, _| s.nearest(p, d)).await
 }
 
 /// `POST /v1/spatial/ray`.
-pub(super) async fn ray_post(
-    State(state): State<AppState>,
-    JsonBody(r): JsonBody<RayReq>,
-) -> Answer {
+pub(super) async fn ray_post(State(state): State<AppState>, ApiJson(r): ApiJson<RayReq>) -> Answer {
     let o = point(r.origin, "origin")?;
     let d = direction(r.direction, &JSON_NAMES)?;
     let m = max_distance(r.max_distance)?;
@@ -754,9 +740,8 @@ pub(super) async fn ray_post(
 /// `GET /v1/spatial/ray`.
 pub(super) async fn ray_get(
     State(state): State<AppState>,
-    req: Result<Query<RayParams>, QueryRejection>,
+    ApiQuery(r): ApiQuery<RayParams>,
 ) -> Answer {
-    let r = query(req)?;
     let o = point([r.x, r.y, r.z], QUERY_NAMES.center)?;
     let d = direction([r.dx, r.dy, r.dz], &QUERY_NAMES)?;
     let m = max_distance(r.max_distance)?;
