@@ -19,6 +19,7 @@ pub mod demo;
 pub mod dto;
 pub mod durable;
 pub mod events;
+pub mod index;
 pub mod limits;
 pub mod listen;
 pub mod metrics;
@@ -154,7 +155,7 @@ pub fn build<J: Journal>(
         tokens,
         metrics: metrics.clone(),
         appearance: Arc::new(api::appearance::Appearance::new(limits.max_render_pixels)),
-        spatial: Arc::new(api::spatial::SpatialAccess::new(metrics.clone())),
+        spatial: Arc::new(index::SpatialAccess::new(metrics.clone())),
         solves: Arc::new(Semaphore::new(
             std::thread::available_parallelism().map_or(2, |n| n.get()),
         )),

@@ -53,7 +53,7 @@ pub struct AppState {
     /// Scenes and turns for renderings.
     pub appearance: Arc<appearance::Appearance>,
     /// The spatial index queries share.
-    pub spatial: Arc<spatial::SpatialAccess>,
+    pub spatial: Arc<crate::server::index::SpatialAccess>,
     /// Turns for camera solutions: one per core.
     pub solves: Arc<tokio::sync::Semaphore>,
 }
