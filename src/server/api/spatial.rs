@@ -1,8 +1,9 @@
 //! Spatial access over HTTP: `/v1/spatial/{sphere,box,nearest,ray}`, each as a `GET`
 //! with a query string and as a `POST` with a JSON body, answered from the shared index
-//! ([`SpatialAccess`](crate::server::index::SpatialAccess)): on the async thread itself when the
-//! answer fits a small budget (a few thousand features, a few hundred bodies), else on a
-//! blocking thread. Answers carry the index's revision in the body and in `ETag`.
+//! ([`SpatialAccess`](crate::server::index::SpatialAccess)): on the async thread itself
+//! when the answer fits a small budget (a few thousand features, a few hundred bodies),
+//! else on a blocking thread. Answers carry the index's revision in the body and in
+//! `ETag`.
 //!
 //! Malformed requests (bad JSON or query strings, unknown fields) are answered 400;
 //! well-formed ones with values a query cannot take (NaN or infinite numbers, a negative
