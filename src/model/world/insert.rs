@@ -1,0 +1,176 @@
+//! Putting bodies into the world: MKBFV, whole bodies, and the checks they pass.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use crate::model::body::Body;
+use crate::model::ids::{FaceId, Serials, VertexId};
+use crate::model::parts::{BodyId, Color};
+use crate::model::pose::Pose;
+use crate::model::range::{self, MAX_COORDINATE};
+
+use super::*;
+
+impl World {
+    // ---------------------------------------------------------------- writes
+
+    /// MKBFV at world level: a new seminal body (one face, one vertex at `pos`, no
+    /// edges), unnamed, attached to the world with the identity pose, so `pos` is also
+    /// its world locus. Serials are taken for the body, the face and the vertex, in that
+    /// order. Inverse: [`World::kill`].
+    ///
+    /// Refused when `pos` is not finite or beyond the world's range.
+    pub fn mkbfv(&mut self, pos: DVec3) -> Result<(BodyId, FaceId, VertexId), WorldError> {
+        if !pos.is_finite() {
+            return Err(WorldError::NonFinite {
+                what: "the vertex locus",
+            });
+        }
+        range::coordinate("the vertex locus", pos)?;
+        let id = BodyId(self.serials.take());
+        let (body, f, v) = Body::seminal(&mut self.serials, pos);
+        self.tree
+            .add(id, None, self.root(), Pose::IDENTITY, Arc::new(body));
+        self.written();
+        Ok((id, f, v))
+    }
+
+    /// Inserts a body built elsewhere, as a part of `supart` placed at `pose` (relative
+    /// to `supart`), under `name` if given. Returns its id.
+    ///
+    /// The body's faces, edges and vertices get **fresh serial numbers** (in the order of
+    /// their old ones) after the body's own, so a body built with another counter, or a
+    /// copy of a body killed earlier, can never collide with or revive an id. Slot ids
+    /// ([`FaceId`] etc.) are kept. To keep the serials a builder takes, build it with
+    /// [`World::insert_with`] instead.
+    ///
+    /// Refused when `supart` is unknown, the name is bad or taken, the pose is not
+    /// finite or would place the body beyond the world's range, the body fails
+    /// [`check_topology`], or a locus is not finite or beyond the range.
+    /// Inverse: [`World::kill`].
+    pub fn insert(
+        &mut self,
+        body: Body,
+        name: Option<&str>,
+        supart: BodyId,
+        pose: Pose,
+    ) -> Result<BodyId, WorldError> {
+        let (name, pose) = self.check_insert(name, supart, pose)?;
+        check_geometry_input(&body)?;
+        let id = BodyId(self.serials.take());
+        let body = renumber(&body, &mut self.serials);
+        self.tree.add(id, name, supart, pose, Arc::new(body));
+        self.written();
+        Ok(id)
+    }
+
+    /// Builds a body with the world's serial counter and inserts it like
+    /// [`World::insert`], keeping the serials the builder took (the body's own serial is
+    /// taken first): `world.insert_with(Some("box"), world.root(), pose, |s| mkcube(s, 2.0,
+    /// 2.0, 2.0))`. If `build` returns a body with serials it did not take from the
+    /// counter given, they are renumbered as [`World::insert`] does.
+    ///
+    /// Refused as [`World::insert`] is, or with `build`'s own error; a refused call takes
+    /// no serials.
+    pub fn insert_with<E>(
+        &mut self,
+        name: Option<&str>,
+        supart: BodyId,
+        pose: Pose,
+        build: impl FnOnce(&mut Serials) -> Result<Body, E>,
+    ) -> Result<BodyId, WorldError>
+    where
+        WorldError: From<E>,
+    {
+        self.insert_colored_with(name, supart, pose, None, build)
+    }
+
+    /// [`World::insert_with`] giving the new body a material colour too, in the same
+    /// single write.
+    pub fn insert_colored_with<E>(
+        &mut self,
+        name: Option<&str>,
+        supart: BodyId,
+        pose: Pose,
+        color: Option<Color>,
+        build: impl FnOnce(&mut Serials) -> Result<Body, E>,
+    ) -> Result<BodyId, WorldError>
+    where
+        WorldError: From<E>,
+    {
+        let (name, pose) = self.check_insert(name, supart, pose)?;
+        let mut serials = self.serials.clone();
+        let id = BodyId(serials.take());
+        let from = serials.peek();
+        let body = build(&mut serials)?;
+        check_geometry_input(&body)?;
+        let body = if serials_fresh(&body, from, serials.peek()) {
+            body
+        } else {
+            renumber(&body, &mut serials)
+        };
+        self.serials = serials;
+        self.tree.add(id, name, supart, pose, Arc::new(body));
+        self.tree.get_mut(id).expect("just added").color = color;
+        self.written();
+        Ok(id)
+    }
+
+    pub(super) fn check_insert(
+        &self,
+        name: Option<&str>,
+        supart: BodyId,
+        pose: Pose,
+    ) -> Result<(Option<String>, Pose), WorldError> {
+        self.live(supart)?;
+        let name = name.map(|n| self.free_name(n, None)).transpose()?;
+        let pose = pose.validated()?;
+        let origin = self
+            .tree
+            .world_pose(supart)
+            .expect("supart is live")
+            .compose(&pose)
+            .position;
+        if !range::is_within(origin, MAX_COORDINATE) {
+            return Err(WorldError::Placement {
+                body: BodyId(self.serials.peek()),
+                value: range::reach(origin),
+            });
+        }
+        Ok((name, pose))
+    }
+
+    /// Checks that giving body `b` the pose `pose` relative to `supart` keeps the
+    /// origins of `b` and of all its parts, at any depth, within the world's range.
+    /// Preconditions: `b` and `supart` are live, `b` is not the root. Linear in the size
+    /// of `b`'s subtree.
+    pub(super) fn check_placement(
+        &self,
+        b: BodyId,
+        supart: BodyId,
+        pose: &Pose,
+    ) -> Result<(), WorldError> {
+        let top = self
+            .tree
+            .world_pose(supart)
+            .expect("supart is live")
+            .compose(pose);
+        let mut stack = vec![(b, top)];
+        while let Some((x, w)) = stack.pop() {
+            if !range::is_within(w.position, MAX_COORDINATE) {
+                return Err(WorldError::Placement {
+                    body: x,
+                    value: range::reach(w.position),
+                });
+            }
+            if let Some(parts) = self.tree.parts(x) {
+                for &p in parts {
+                    let node = self.tree.get(p).expect("a part is live");
+                    stack.push((p, w.compose(&node.pose)));
+                }
+            }
+        }
+        Ok(())
+    }
+}
