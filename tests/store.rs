@@ -1437,26 +1437,28 @@ fn fixture_form(w: &World) -> Value {
     })
 }
 
-/// Writes the fixture: `WINGED_WRITE_FIXTURE=1 cargo test --test store -- --ignored
-/// write_the_journal_fixture`. Run only to make a new fixture for a new format; the
-/// committed one must stay as it was written.
+/// The fixture's edits, journaled now, recover to the world they made; with
+/// `WINGED_WRITE_FIXTURE=1` the journal and its world are also written to
+/// `tests/fixtures` (only to make a fixture for a new journal format: the committed one
+/// must stay as it was written).
 #[test]
-#[ignore = "writes tests/fixtures; run by hand for a new journal format"]
-fn write_the_journal_fixture() {
-    assert!(
-        std::env::var_os("WINGED_WRITE_FIXTURE").is_some(),
-        "set WINGED_WRITE_FIXTURE=1 to overwrite the committed fixture"
-    );
+fn the_fixture_edits_journal_and_recover_to_their_world() {
     let mut run = varied_run();
     run.flush();
     run.close();
-    let out = Path::new(FIXTURE);
-    std::fs::create_dir_all(out).unwrap();
-    for name in ["journal.db", "reached"] {
-        std::fs::copy(run.dir.path().join(name), out.join(name)).unwrap();
+    let mut store = Store::open(run.dir.path(), options()).unwrap();
+    let rec = store.recover(|_, _, _, _| {}).unwrap();
+    assert_eq!(fixture_form(&rec.world), fixture_form(&run.world));
+    drop(store);
+    if std::env::var_os("WINGED_WRITE_FIXTURE").is_some() {
+        let out = Path::new(FIXTURE);
+        std::fs::create_dir_all(out).unwrap();
+        for name in ["journal.db", "reached"] {
+            std::fs::copy(run.dir.path().join(name), out.join(name)).unwrap();
+        }
+        let form = serde_json::to_string_pretty(&fixture_form(&run.world)).unwrap();
+        std::fs::write(out.join("world.json"), form + "\n").unwrap();
     }
-    let form = serde_json::to_string_pretty(&fixture_form(&run.world)).unwrap();
-    std::fs::write(out.join("world.json"), form + "\n").unwrap();
 }
 
 #[test]
