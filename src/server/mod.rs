@@ -26,9 +26,6 @@ pub mod metrics;
 pub mod problem;
 pub mod spec;
 
-/// The edit language, where the handlers and the owner have always found it.
-pub use crate::edit;
-
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::time::Duration;

@@ -75,12 +75,12 @@ use super::appearance::CameraRef;
 use super::extract::ApiJson;
 use super::precondition::etag;
 use super::{Answer, AppState, snapshot};
+use crate::edit::Edit;
 use crate::model::camera::{Camera, Intrinsics};
 use crate::model::{Serial, World};
 use crate::server::actor::Applied;
 use crate::server::auth::Role;
 use crate::server::dto::{CameraReq, IntrinsicsDto, PoseDto};
-use crate::server::edit::Edit;
 use crate::server::limits::{
     ImageError, ImageLimits, Measure, PNG_HEADER_BYTES, decode_png, png_size,
 };

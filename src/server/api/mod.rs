@@ -28,10 +28,10 @@ use serde::Serialize;
 
 use super::actor::{Applied, Handle};
 use super::auth::{Guard, Role, Tokens, guard};
-use super::edit::{Edit, Outcome};
 use super::events::Feed;
 use super::metrics::Metrics;
 use super::problem::Problem;
+use crate::edit::{Edit, Outcome};
 use crate::model::World;
 use precondition::etag;
 

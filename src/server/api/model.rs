@@ -9,13 +9,13 @@ use serde_json::json;
 use super::extract::{ApiJson, ApiPath, ApiQuery};
 use super::precondition::{IfMatch, Unused, WriteJson};
 use super::{Answer, HeavyReads, read_answer, snapshot, world_size, write};
+use crate::edit::Edit;
 use crate::model::{BodyId, Serial, World};
 use crate::server::actor::Handle;
 use crate::server::dto::{
     BodyDto, CameraDto, CameraReq, CopyReq, CreateBody, EdgeDto, EulerOp, FaceDto, HexColor,
     LightDto, PatchBody, SweepReq, TopologyDto, TransformReq, VertexDto, euler_of,
 };
-use crate::server::edit::Edit;
 use crate::server::problem::Problem;
 
 pub(super) async fn world(State(h): State<Handle>) -> Answer {
