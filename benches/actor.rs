@@ -16,11 +16,13 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::DVec3;
 use tokio::runtime::Runtime;
 use winged::edit::Edit;
+use winged::edit::command::{CreateBody, EulerOp, Motion, Move, Shape};
+use winged::model::Frame;
 use winged::model::World;
 use winged::server::actor::{self, Handle};
-use winged::server::dto::{CreateBody, EulerOp, FrameDto, Shape, TransformOp, TransformReq};
 
 /// Requesters in the concurrent benchmarks (as many as HTTP connections in the wrk run).
 const TASKS: u64 = 64;
@@ -37,11 +39,11 @@ fn runtime() -> Runtime {
 fn translate(body: u64, x: f64) -> Edit {
     Edit::Transform {
         body,
-        req: TransformReq {
-            op: TransformOp::Translate {
-                vector: [x, 0.0, 0.0],
+        motion: Move {
+            motion: Motion::Translate {
+                vector: DVec3::new(x, 0.0, 0.0),
             },
-            frame: FrameDto::World,
+            frame: Frame::World,
             target: None,
         },
     }
@@ -56,7 +58,7 @@ async fn create_box(h: &Handle) -> u64 {
             pose: None,
             color: None,
             shape: Shape::Box {
-                size: [2.0, 2.0, 2.0],
+                size: DVec3::splat(2.0),
             },
         }))
         .await
@@ -84,7 +86,7 @@ async fn mkev_klev(h: &Handle, body: u64, face: u64, vertex: u64) {
             op: EulerOp::Mkev {
                 face,
                 vertex,
-                position: Some([0.0, 0.0, 0.0]),
+                position: Some(DVec3::ZERO),
             },
         })
         .await

@@ -17,12 +17,13 @@
 use std::path::Path;
 use std::time::Instant;
 
+use glam::{DQuat, DVec3};
+use winged::edit::command::{
+    CameraSpec, CreateBody, EulerOp, LookAt, Motion, Move, PatchBody, Shape,
+};
 use winged::edit::{Edit, apply};
 use winged::model::{BodyId, Serial, World};
-use winged::server::dto::{
-    CameraReq, CreateBody, EulerOp, FrameDto, IntrinsicsDto, LookAtDto, PatchBody, PoseDto, Shape,
-    TransformOp, TransformReq,
-};
+use winged::model::{Frame, Intrinsics, Pose};
 use winged::store::{Durability, Entry, Store, StoreOptions, snapshot};
 
 /// Bodies made before the mix of changes starts.
@@ -177,11 +178,11 @@ fn build(data: &Path, side: &Path, entries: u64) -> Result<World, Box<dyn std::e
     for i in 0..BODIES.min(entries as usize) {
         let shape = if i % 2 == 0 {
             Shape::Box {
-                size: [
+                size: DVec3::new(
                     rng.range(0.1, 1.0),
                     rng.range(0.1, 1.0),
                     rng.range(0.1, 1.0),
-                ],
+                ),
             }
         } else {
             Shape::Cylinder {
@@ -219,21 +220,21 @@ fn build(data: &Path, side: &Path, entries: u64) -> Result<World, Box<dyn std::e
             })?;
         } else if roll < 60 {
             let op = if rng.below(2) == 0 {
-                TransformOp::Translate {
-                    vector: [rng.range(-0.1, 0.1), rng.range(-0.1, 0.1), 0.0],
+                Motion::Translate {
+                    vector: DVec3::new(rng.range(-0.1, 0.1), rng.range(-0.1, 0.1), 0.0),
                 }
             } else {
-                TransformOp::Rotate {
-                    axis: [0.0, 0.0, 1.0],
+                Motion::Rotate {
+                    axis: DVec3::Z,
                     angle_deg: rng.range(-10.0, 10.0),
-                    center: [0.0; 3],
+                    center: DVec3::ZERO,
                 }
             };
             b.push(Edit::Transform {
                 body,
-                req: TransformReq {
-                    op,
-                    frame: FrameDto::World,
+                motion: Move {
+                    motion: op,
+                    frame: Frame::World,
                     target: None,
                 },
             })?;
@@ -272,14 +273,14 @@ fn build(data: &Path, side: &Path, entries: u64) -> Result<World, Box<dyn std::e
             let a = rng.range(0.0, std::f64::consts::TAU);
             b.push(Edit::PutCamera {
                 name: format!("cam{}", rng.below(8)),
-                camera: CameraReq {
+                camera: CameraSpec {
                     pose: None,
-                    look_at: Some(LookAtDto {
-                        eye: [3.0 * a.cos(), 3.0 * a.sin(), 1.5],
-                        target: [0.0, 0.0, 0.5],
-                        up: [0.0, 0.0, 1.0],
+                    look_at: Some(LookAt {
+                        eye: DVec3::new(3.0 * a.cos(), 3.0 * a.sin(), 1.5),
+                        target: DVec3::new(0.0, 0.0, 0.5),
+                        up: DVec3::Z,
                     }),
-                    intrinsics: Some(IntrinsicsDto {
+                    intrinsics: Some(Intrinsics {
                         width: 640,
                         height: 480,
                         fx: 600.0,
@@ -296,15 +297,15 @@ fn build(data: &Path, side: &Path, entries: u64) -> Result<World, Box<dyn std::e
     Ok(b.world)
 }
 
-fn random_pose(rng: &mut Rng) -> PoseDto {
+fn random_pose(rng: &mut Rng) -> Pose {
     let half = rng.range(-1.5, 1.5);
-    PoseDto {
-        position: [
+    Pose {
+        position: DVec3::new(
             rng.range(-2.0, 2.0),
             rng.range(-2.0, 2.0),
             rng.range(0.0, 1.0),
-        ],
-        rotation: [0.0, 0.0, half.sin(), half.cos()],
+        ),
+        rotation: DQuat::from_xyzw(0.0, 0.0, half.sin(), half.cos()),
     }
 }
 

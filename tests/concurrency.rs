@@ -117,3 +117,69 @@ fn sixteen_clients_writing_and_reading_at_once() {
     );
     check_topology_dump(&s.get(&format!("/v1/bodies/{b}/topology")).ok(), 0);
 }
+
+/// The `winged_edits_planning` gauge: large edits being built beside the world's owner.
+fn planning(s: &TestServer) -> u64 {
+    let text = s.get("/metrics").text;
+    text.lines()
+        .find_map(|l| l.strip_prefix("winged_edits_planning "))
+        .and_then(|v| v.trim().parse().ok())
+        .expect("the planning gauge is exported")
+}
+
+/// A large body is built beside the world's owner: while a sphere of 500,000 faces is
+/// being built (seen on the planning gauge), a PATCH of another body's pose and reads
+/// are answered, and the PATCH's revision comes before the sphere's. Order of events
+/// only; no timing.
+#[test]
+fn small_writes_pass_a_large_body_being_built() {
+    let s = Arc::new(TestServer::start());
+    let small = s.post(
+        "/v1/bodies",
+        &json!({"name": "small", "shape": {"type": "box", "size": [1, 1, 1]}}),
+    );
+    assert_eq!(small.status, 201);
+    let small = small.json()["id"].as_u64().unwrap();
+    assert_eq!(planning(&s), 0);
+
+    let maker = s.clone();
+    let creating = std::thread::spawn(move || {
+        maker.post(
+            "/v1/bodies",
+            &json!({"name": "ball", "shape": {"type": "sphere", "radius": 1, "segments": 1000, "rings": 500}}),
+        )
+    });
+    while planning(&s) == 0 {
+        assert!(
+            !creating.is_finished(),
+            "the sphere was made before its build could be seen"
+        );
+        std::thread::yield_now();
+    }
+    let moved = s.patch(
+        &format!("/v1/bodies/{small}"),
+        &json!({"pose": {"position": [5, 0, 0]}}),
+    );
+    assert_eq!(moved.status, 200, "{}", moved.text);
+    let moved_at = moved.json()["revision"].as_u64().unwrap();
+    let read = s.get(&format!("/v1/bodies/{small}")).ok();
+    assert_eq!(read["pose"]["position"], json!([5.0, 0.0, 0.0]));
+    let world = s.get("/v1/world").ok();
+    assert!(
+        world["revision"].as_u64().unwrap() >= moved_at,
+        "a read sees the write it follows"
+    );
+
+    let made = creating.join().expect("the creating client");
+    assert_eq!(made.status, 201, "{}", made.text);
+    let made = made.json();
+    assert!(
+        moved_at < made["revision"].as_u64().unwrap(),
+        "the small write went before the large one: {moved_at} vs {}",
+        made["revision"]
+    );
+    assert_eq!(made["faces"], json!(500_000));
+    assert_eq!(planning(&s), 0);
+    let ball = s.get(&format!("/v1/bodies/{}", made["id"])).ok();
+    assert_eq!(ball["name"], "ball");
+}

@@ -23,8 +23,8 @@ use base64::Engine as _;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use process::{Server, agent, memory_kib_of};
 use serde_json::{Value, json};
+use winged::edit::command::{MAX_BODY_CORNERS, MAX_BODY_FACES, MAX_BODY_VERTICES};
 use winged::server::api::MAX_REQUEST_BYTES;
-use winged::server::dto::{MAX_BODY_CORNERS, MAX_BODY_FACES, MAX_BODY_VERTICES};
 
 const MIB: u64 = 1024 * 1024;
 

@@ -1338,8 +1338,8 @@ proptest::proptest! {
 // ------------------------------------------------------------------ a journal of an older format
 
 /// Where the fixture journal lives: a data directory written by the journal format of
-/// 2026-11 (entries are the HTTP request types, tagged by `edit`), with the world it
-/// must recover to.
+/// 2026-11 (format version 1, written when the HTTP request types were the journal's
+/// entries, tagged by `edit`), with the world it must recover to.
 const FIXTURE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/tests/fixtures/journal-2026-11"
@@ -1477,4 +1477,35 @@ fn a_journal_of_the_2026_11_format_recovers_to_the_world_it_recorded() {
     assert!(rec.replayed > 100, "{} entries", rec.replayed);
     assert_eq!(fixture_form(&rec.world), want);
     check_world(&rec.world).unwrap();
+}
+
+/// Every entry of the 2026-11 fixture reads as an edit of today's command language and
+/// writes back as the same JSON: the commands' serde form is still format version 1.
+#[test]
+fn every_fixture_entry_reads_as_a_command_and_writes_back_the_same() {
+    let conn = rusqlite::Connection::open_with_flags(
+        Path::new(FIXTURE).join("journal.db"),
+        rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY,
+    )
+    .unwrap();
+    let mut query = conn.prepare("SELECT revision, edit FROM journal").unwrap();
+    let entries: Vec<(i64, String)> = query
+        .query_map([], |r| Ok((r.get(0)?, r.get(1)?)))
+        .unwrap()
+        .map(Result::unwrap)
+        .collect();
+    let mut kinds = std::collections::BTreeSet::new();
+    for (revision, text) in &entries {
+        let edit: Edit = serde_json::from_str(text)
+            .unwrap_or_else(|e| panic!("entry {revision} does not read ({e}): {text}"));
+        kinds.insert(edit.kind());
+        let written = serde_json::to_value(&edit).unwrap();
+        let stored: Value = serde_json::from_str(text).unwrap();
+        assert_eq!(written, stored, "entry {revision} writes back otherwise");
+    }
+    assert_eq!(
+        kinds.len(),
+        13,
+        "every kind of edit is in the fixture: {kinds:?}"
+    );
 }

@@ -11,16 +11,17 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::command::{
-    CameraReq, CameraReqError, CreateBody, EulerOp, FrameDto, LightDto, PatchBody, Shape,
-    SweepKind, SweepReq, TransformOp, TransformReq, points2,
+    CameraSpec, CameraSpecError, CreateBody, EulerOp, LightSpec, Motion, Move, PatchBody, Shape,
+    Sweep, SweepKind,
 };
+use super::plan::{Prepared, prepare};
 use crate::model::range;
 use crate::model::solids::{
     BuildError, SolidError, Twist, box_solid, cone, cylinder, mktetra, prism_solid, pyramid_solid,
     sphere, torus,
 };
 use crate::model::{
-    Body, BodyId, EdgeId, Entity, EulerError, FaceId, Frame, LightError, Pose, Serial, Transform,
+    Body, BodyId, Built, EdgeId, Entity, EulerError, FaceId, LightError, Pose, Serial, Transform,
     VertexId, World, WorldError,
 };
 
@@ -55,15 +56,17 @@ pub enum Edit {
     Transform {
         /// The body.
         body: u64,
-        /// The transform.
-        req: TransformReq,
+        /// The motion.
+        #[serde(rename = "req")]
+        motion: Move,
     },
     /// A sweep of a face.
     Sweep {
         /// The body.
         body: u64,
         /// The sweep.
-        req: SweepReq,
+        #[serde(rename = "req")]
+        sweep: Sweep,
     },
     /// FVDUAL.
     Dual {
@@ -87,7 +90,7 @@ pub enum Edit {
         /// Its name.
         name: String,
         /// The camera.
-        camera: CameraReq,
+        camera: CameraSpec,
     },
     /// Remove a camera.
     DeleteCamera {
@@ -99,7 +102,7 @@ pub enum Edit {
         /// Its name.
         name: String,
         /// The light.
-        light: LightDto,
+        light: LightSpec,
     },
     /// Remove a light.
     DeleteLight {
@@ -176,10 +179,10 @@ pub enum EditError {
     /// A solid's parameters are not a solid.
     #[error(transparent)]
     Solid(#[from] SolidError),
-    /// The camera request is not a camera.
+    /// The camera described is not a camera.
     #[error(transparent)]
-    Camera(#[from] CameraReqError),
-    /// The light request is not a light.
+    Camera(#[from] CameraSpecError),
+    /// The light described is not a light.
     #[error(transparent)]
     Light(#[from] LightError),
     /// An id that names nothing, or names something of another kind or body.
@@ -219,7 +222,7 @@ impl EditError {
         match self {
             EditError::World(e) => e.is_out_of_range(),
             EditError::Solid(e) => e.is_out_of_range(),
-            EditError::Camera(CameraReqError::Camera(e)) => e.is_out_of_range(),
+            EditError::Camera(CameraSpecError::Camera(e)) => e.is_out_of_range(),
             EditError::Light(e) => e.is_out_of_range(),
             _ => false,
         }
@@ -287,8 +290,7 @@ fn face_anywhere(world: &World, id: u64) -> Result<(BodyId, FaceId), EditError> 
     }
 }
 
-fn finite3(what: &str, v: [f64; 3]) -> Result<DVec3, EditError> {
-    let p = DVec3::from_array(v);
+fn finite3(what: &str, p: DVec3) -> Result<DVec3, EditError> {
     if p.is_finite() {
         Ok(p)
     } else {
@@ -308,7 +310,7 @@ fn check_faces(faces: usize) -> Result<(), EditError> {
 }
 
 /// An upper bound on the faces a shape makes, checked before anything is built.
-fn shape_faces(shape: &Shape) -> usize {
+pub(super) fn shape_faces(shape: &Shape) -> usize {
     let (s, r) = match *shape {
         Shape::Cylinder { segments, .. } | Shape::Cone { segments, .. } => (segments as usize, 1),
         Shape::Sphere {
@@ -327,7 +329,7 @@ fn shape_faces(shape: &Shape) -> usize {
 /// Builds the body for `shape` with the world's serials.
 fn build(shape: &Shape, s: &mut crate::model::Serials) -> Result<Body, EditError> {
     Ok(match shape {
-        Shape::Box { size } => box_solid(s, DVec3::from_array(*size))?,
+        Shape::Box { size } => box_solid(s, *size)?,
         Shape::Tetrahedron { radius } => {
             if !(radius.is_finite() && *radius > 0.0) {
                 return Err(SolidError::NotPositive {
@@ -339,8 +341,8 @@ fn build(shape: &Shape, s: &mut crate::model::Serials) -> Result<Body, EditError
             range::length("radius", *radius).map_err(SolidError::from)?;
             mktetra(s, *radius)?
         }
-        Shape::Prism { polygon, height } => prism_solid(s, &points2(polygon), *height)?,
-        Shape::Pyramid { polygon, height } => pyramid_solid(s, &points2(polygon), *height)?,
+        Shape::Prism { polygon, height } => prism_solid(s, polygon, *height)?,
+        Shape::Pyramid { polygon, height } => pyramid_solid(s, polygon, *height)?,
         Shape::Cylinder {
             radius,
             height,
@@ -369,9 +371,8 @@ fn build(shape: &Shape, s: &mut crate::model::Serials) -> Result<Body, EditError
             *rings as usize,
         )?,
         Shape::Polyhedron { vertices, faces } => {
-            let pos: Vec<DVec3> = vertices.iter().map(|&v| DVec3::from_array(v)).collect();
             let faces: Vec<&[u32]> = faces.iter().collect();
-            Body::from_polygons(s, &pos, &faces)?
+            Body::from_polygons(s, vertices, &faces)?
         }
         Shape::Seminal { position } => Body::seminal(s, finite3("position", *position)?).0,
     })
@@ -383,10 +384,28 @@ fn counts(outcome: &mut Outcome, b: &Body) {
     outcome.vertices = Some(b.vertex_count());
 }
 
-/// Applies `edit` to `world`. On refusal the world is unchanged.
+/// Applies `edit` to `world`: plans it ([`plan`](super::plan)) and applies the plan at
+/// once. On refusal the world is unchanged.
 pub fn apply(world: &mut World, edit: &Edit) -> Result<Outcome, EditError> {
+    let prepared = prepare(edit)?;
+    apply_prepared(world, edit, prepared)
+}
+
+/// Applies `edit`, whose world-free work `prepared` holds, to `world`. On refusal the
+/// world is unchanged. Precondition: `prepared` was made by [`prepare`] from `edit`.
+pub(super) fn apply_prepared(
+    world: &mut World,
+    edit: &Edit,
+    prepared: Prepared,
+) -> Result<Outcome, EditError> {
     match edit {
-        Edit::CreateBody(req) => create(world, req),
+        Edit::CreateBody(req) => {
+            let built = match prepared {
+                Prepared::Body(built) => *built,
+                _ => build_checked(req)?,
+            };
+            create(world, req, built)
+        }
         Edit::PatchBody { body, patch } => {
             let b = body_id(world, *body)?;
             patch_body(world, b, patch)?;
@@ -407,15 +426,15 @@ pub fn apply(world: &mut World, edit: &Edit) -> Result<Outcome, EditError> {
             let b = body_id(world, *body)?;
             euler(world, b, op)
         }
-        Edit::Transform { body, req } => {
+        Edit::Transform { body, motion } => {
             let b = body_id(world, *body)?;
-            transform(world, b, req)?;
+            transform(world, b, motion)?;
             Ok(Outcome {
                 id: Some(*body),
                 ..Outcome::default()
             })
         }
-        Edit::Sweep { body, req } => {
+        Edit::Sweep { body, sweep: req } => {
             let b = body_id(world, *body)?;
             sweep(world, b, req)
         }
@@ -459,7 +478,10 @@ pub fn apply(world: &mut World, edit: &Edit) -> Result<Outcome, EditError> {
             Ok(o)
         }
         Edit::PutCamera { name, camera } => {
-            let c = camera.to_camera()?;
+            let c = match prepared {
+                Prepared::Camera(c) => c,
+                _ => camera.to_camera()?,
+            };
             world.set_camera(name, c)?;
             Ok(Outcome::default())
         }
@@ -468,7 +490,10 @@ pub fn apply(world: &mut World, edit: &Edit) -> Result<Outcome, EditError> {
             Ok(Outcome::default())
         }
         Edit::PutLight { name, light } => {
-            let l = light.to_light()?;
+            let l = match prepared {
+                Prepared::Light(l) => l,
+                _ => light.to_light()?,
+            };
             world.set_light(name, l)?;
             Ok(Outcome::default())
         }
@@ -479,34 +504,27 @@ pub fn apply(world: &mut World, edit: &Edit) -> Result<Outcome, EditError> {
     }
 }
 
-fn create(world: &mut World, req: &CreateBody) -> Result<Outcome, EditError> {
+/// The body `req` asks for, built and checked apart from any world (see [`Built`]).
+pub(super) fn build_checked(req: &CreateBody) -> Result<Built, EditError> {
     check_faces(shape_faces(&req.shape))?;
+    Built::new(|s| build(&req.shape, s))
+}
+
+fn create(world: &mut World, req: &CreateBody, built: Built) -> Result<Outcome, EditError> {
     let parent = match req.parent {
         Some(p) => body_id(world, p)?,
         None => world.root(),
     };
-    let pose = req.pose.map_or(Pose::IDENTITY, |p| p.to_pose());
-    let shape = &req.shape;
-    // `insert_with` speaks `WorldError`; a shape's own error is kept aside here.
-    let mut refused: Option<EditError> = None;
-    let color = req.color.map(|c| c.0);
-    let id = world.insert_colored_with(req.name.as_deref(), parent, pose, color, |s| {
-        build(shape, s).map_err(|e| {
-            refused = Some(e);
-            WorldError::NonFinite { what: "shape" }
-        })
-    });
-    let id = match id {
-        Ok(id) => id,
-        Err(e) => return Err(refused.take().unwrap_or(e.into())),
-    };
+    let pose = req.pose.unwrap_or(Pose::IDENTITY);
+    let color = req.color;
+    let id = world.insert_built(built, req.name.as_deref(), parent, pose, color)?;
     let body = body_of(world, id);
     let mut o = Outcome {
         id: Some(id.get()),
         ..Outcome::default()
     };
     counts(&mut o, body);
-    if matches!(shape, Shape::Seminal { .. }) {
+    if matches!(req.shape, Shape::Seminal { .. }) {
         o.face = body.faces().next().map(|f| body.face_serial(f).get());
         o.vertex = body.vertices().next().map(|v| body.vertex_serial(v).get());
     }
@@ -516,8 +534,7 @@ fn create(world: &mut World, req: &CreateBody) -> Result<Outcome, EditError> {
 fn patch_body(world: &mut World, b: BodyId, patch: &PatchBody) -> Result<(), EditError> {
     let parent = patch.parent.map(|p| body_id(world, p)).transpose()?;
     let name = patch.name.as_ref().map(|n| n.as_deref());
-    let color = patch.color.map(|c| c.map(|c| c.0));
-    world.update(b, name, parent, patch.pose.map(|p| p.to_pose()), color)?;
+    world.update(b, name, parent, patch.pose, patch.color)?;
     Ok(())
 }
 
@@ -692,10 +709,10 @@ fn nearest_vertex(
         })
 }
 
-fn transform(world: &mut World, b: BodyId, req: &TransformReq) -> Result<(), EditError> {
-    let t = match req.op {
-        TransformOp::Translate { vector } => Transform::Translate(finite3("vector", vector)?),
-        TransformOp::Rotate {
+fn transform(world: &mut World, b: BodyId, req: &Move) -> Result<(), EditError> {
+    let t = match req.motion {
+        Motion::Translate { vector } => Transform::Translate(finite3("vector", vector)?),
+        Motion::Rotate {
             axis,
             angle_deg,
             center,
@@ -704,19 +721,16 @@ fn transform(world: &mut World, b: BodyId, req: &TransformReq) -> Result<(), Edi
             angle_rad: angle_deg.to_radians(),
             center: finite3("center", center)?,
         },
-        TransformOp::Dilate { factor, center } => Transform::Dilate {
+        Motion::Dilate { factor, center } => Transform::Dilate {
             factor,
             center: finite3("center", center)?,
         },
-        TransformOp::Reflect { normal, point } => Transform::Reflect {
+        Motion::Reflect { normal, point } => Transform::Reflect {
             normal: finite3("normal", normal)?,
             point: finite3("point", point)?,
         },
     };
-    let frame = match req.frame {
-        FrameDto::World => Frame::World,
-        FrameDto::Body => Frame::Body,
-    };
+    let frame = req.frame;
     let what = match req.target {
         None => Entity::Body,
         Some(id) => match world.find_entity(Serial(id)) {
@@ -734,7 +748,7 @@ fn transform(world: &mut World, b: BodyId, req: &TransformReq) -> Result<(), Edi
     Ok(())
 }
 
-fn sweep(world: &mut World, b: BodyId, req: &SweepReq) -> Result<Outcome, EditError> {
+fn sweep(world: &mut World, b: BodyId, req: &Sweep) -> Result<Outcome, EditError> {
     let f = face_in(world, b, req.face)?;
     let body = body_of(world, b);
     let plane = body.face_plane(f).ok_or(SolidError::DegenerateFace {

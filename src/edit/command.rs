@@ -1,108 +1,75 @@
-//! The commands of the edit language as data: what a write asks for (a body's shape, an
-//! Euler operator, a transform, a camera or a light), in the serde form the journal
-//! stores and the HTTP API reads.
+//! The commands of the edit language: what each write asks for (a body's shape, an Euler
+//! operator, a transform, a camera or a light), in the kernel's own types, and in the
+//! serde form the journal stores.
+//!
+//! These are not the HTTP API's types: the server reads a request in types of its own
+//! and turns it into a command, so the API's JSON can change without changing what the
+//! journal holds. The serde form here **is** the journal's format, version
+//! [`FORMAT`]: a change to it must keep reading every entry ever written, or come with a
+//! new version and a reader for the old one; `tests/fixtures/journal-2026-11/` holds a
+//! journal of version 1 that must keep replaying to its world.
 //!
 //! Ids are the kernel's serial numbers (JSON integers). Vectors are `[x, y, z]` arrays in
-//! meters; a pose is `{"position": [x, y, z], "rotation": [qx, qy, qz, qw]}`.
+//! meters; a pose is `{"position": [x, y, z], "rotation": [qx, qy, qz, qw]}`; a colour
+//! is `"#rrggbb"`.
 
 pub mod bounded;
 mod face_list;
-mod shape_json;
 
-use glam::{DQuat, DVec2, DVec3};
+use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use crate::model::{BaumgartRaster, Camera, Color, Intrinsics, Light, Pose, camera::CameraError};
+use crate::model::{
+    BaumgartRaster, Camera, Color, Frame, Intrinsics, Light, LightError, Pose, camera::CameraError,
+};
 pub use face_list::FaceList;
 
-/// The most faces a body made by one request may have.
+/// The version of the serde form of [`Edit`](super::Edit) and its commands that this
+/// build writes (and, with every earlier one, reads).
+pub const FORMAT: u32 = 1;
+
+/// The most faces a body made by one edit may have.
 pub const MAX_BODY_FACES: usize = 2_000_000;
 
-/// The most vertices a polyhedron given in one request may have: twice the faces, which
+/// The most vertices a polyhedron given in one edit may have: twice the faces, which
 /// every closed polyhedron of [`MAX_BODY_FACES`] faces without handles stays below
 /// (its vertices number at most `2F − 4`, when each meets three faces).
 pub const MAX_BODY_VERTICES: usize = 2 * MAX_BODY_FACES;
 
-/// The most vertex indices a polyhedron given in one request may list in all its faces:
+/// The most vertex indices a polyhedron given in one edit may list in all its faces:
 /// six per face, which every closed polyhedron of [`MAX_BODY_FACES`] faces without
 /// handles stays below (its indices, two per edge, number at most `6F − 12`).
 pub const MAX_BODY_CORNERS: usize = 6 * MAX_BODY_FACES;
 
-/// A pose relative to the parent body.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct PoseDto {
-    /// Position `[x, y, z]`, meters.
-    #[serde(default)]
-    pub position: [f64; 3],
-    /// Unit quaternion `[qx, qy, qz, qw]`.
-    #[serde(default = "identity_quat")]
-    pub rotation: [f64; 4],
-}
-
-fn identity_quat() -> [f64; 4] {
-    [0.0, 0.0, 0.0, 1.0]
-}
-
-impl PoseDto {
-    /// The kernel pose (not yet validated: the world validates it).
-    pub fn to_pose(self) -> Pose {
-        let [x, y, z, w] = self.rotation;
-        Pose {
-            position: DVec3::from_array(self.position),
-            rotation: DQuat::from_xyzw(x, y, z, w),
-        }
-    }
-}
-
-impl From<Pose> for PoseDto {
-    fn from(p: Pose) -> Self {
-        PoseDto {
-            position: p.position.to_array(),
-            rotation: p.rotation.to_array(),
-        }
-    }
-}
-
-fn d32() -> u32 {
-    32
-}
-fn d16() -> u32 {
-    16
-}
-
 /// The solid a new body starts as. Primitives are centred on the body's origin; those
-/// with an axis have it on z, centred in height.
-///
-/// In JSON, an object whose `type` names the variant (snake case) beside the variant's
-/// fields. It is read field by field as it streams, lists bounded while they are read
-/// (see `shape_json`): unknown fields and those of other variants are refused, and a
-/// polyhedron past [`MAX_BODY_VERTICES`], [`MAX_BODY_FACES`] or [`MAX_BODY_CORNERS`]
-/// is refused before the rest of it is read.
-#[derive(Clone, Debug, Serialize, PartialEq)]
+/// with an axis have it on z, centred in height. Parameters are checked when the body is
+/// built (see [`crate::model::solids`]). Read, a missing count of steps is 32 round the
+/// axis and 16 round a sphere's or torus's other way, a missing seminal locus the
+/// origin (every entry written has them all).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum Shape {
-    /// A box of `size` `[x, y, z]` (Baumgart's MKCUBE).
+    /// MKCUBE: a box of edge lengths `size`.
     Box {
-        /// Edge lengths.
-        size: [f64; 3],
+        /// Edge lengths along x, y and z.
+        size: DVec3,
     },
-    /// A regular tetrahedron with vertices `radius` from the centre (MKTETRA).
+    /// MKTETRA: a regular tetrahedron with vertices `radius` from the centre.
     Tetrahedron {
         /// Circumradius.
         radius: f64,
     },
-    /// A polygon in the xy-plane swept up by `height` (PRISM).
+    /// PRISM: a polygon in the xy-plane swept up by `height`.
     Prism {
-        /// The polygon's corners `[x, y]`, in order.
-        polygon: Vec<[f64; 2]>,
+        /// The polygon's corners, in order.
+        polygon: Vec<DVec2>,
         /// The height.
         height: f64,
     },
-    /// A polygon in the xy-plane with a peak `height` above its centroid (PYRAMID).
+    /// PYRAMID: a polygon in the xy-plane with a peak `height` above its centroid.
     Pyramid {
-        /// The polygon's corners `[x, y]`, in order.
-        polygon: Vec<[f64; 2]>,
+        /// The polygon's corners, in order.
+        polygon: Vec<DVec2>,
         /// The height.
         height: f64,
     },
@@ -112,7 +79,8 @@ pub enum Shape {
         radius: f64,
         /// Height.
         height: f64,
-        /// Sides round the axis (default 32).
+        /// Sides round the axis.
+        #[serde(default = "d32")]
         segments: u32,
     },
     /// A cone of `segments` sides.
@@ -121,16 +89,19 @@ pub enum Shape {
         radius: f64,
         /// Height.
         height: f64,
-        /// Sides round the axis (default 32).
+        /// Sides round the axis.
+        #[serde(default = "d32")]
         segments: u32,
     },
-    /// A UV sphere.
+    /// A UV sphere of `segments × rings` faces.
     Sphere {
         /// Radius.
         radius: f64,
-        /// Meridians (default 32).
+        /// Meridians.
+        #[serde(default = "d32")]
         segments: u32,
-        /// Parallels, bands from pole to pole (default 16).
+        /// Parallels, bands from pole to pole.
+        #[serde(default = "d16")]
         rings: u32,
     },
     /// A torus about the z axis.
@@ -139,74 +110,65 @@ pub enum Shape {
         major_radius: f64,
         /// The tube's radius.
         minor_radius: f64,
-        /// Steps round the axis (default 32).
+        /// Steps round the axis.
+        #[serde(default = "d32")]
         segments: u32,
-        /// Steps round the tube (default 16).
+        /// Steps round the tube.
+        #[serde(default = "d16")]
         rings: u32,
     },
     /// A closed polyhedron from vertex and face lists; each face lists vertex indices
     /// counter-clockwise seen from outside.
     Polyhedron {
         /// Vertex loci.
-        vertices: Vec<[f64; 3]>,
+        vertices: Vec<DVec3>,
         /// Faces as vertex indices.
         faces: FaceList,
     },
     /// MKBFV: one face and one vertex, the seed of an Euler construction.
     Seminal {
-        /// The vertex locus (default the origin).
-        position: [f64; 3],
+        /// The vertex locus.
+        #[serde(default)]
+        position: DVec3,
     },
 }
 
-/// A material colour in JSON: the string `"#rrggbb"`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct HexColor(pub Color);
-
-impl Serialize for HexColor {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(&self.0.to_hex())
-    }
+fn d32() -> u32 {
+    32
 }
 
-impl<'de> Deserialize<'de> for HexColor {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let text = String::deserialize(d)?;
-        Color::from_hex(&text).map(HexColor).ok_or_else(|| {
-            serde::de::Error::custom(format!(
-                "colour {text:?} is not of the form \"#rrggbb\" (hexadecimal)"
-            ))
-        })
-    }
+fn d16() -> u32 {
+    16
 }
 
-/// `POST /v1/bodies`.
+fn up_z() -> DVec3 {
+    DVec3::Z
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// Make a body.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
 pub struct CreateBody {
-    /// A unique name (optional).
-    #[serde(default)]
+    /// A unique name, if any.
     pub name: Option<String>,
-    /// The supart's id (default: the world).
-    #[serde(default)]
+    /// The supart's id (`None`: the world).
     pub parent: Option<u64>,
-    /// Pose relative to the supart (default: identity).
-    #[serde(default)]
-    pub pose: Option<PoseDto>,
-    /// Material colour `"#rrggbb"` (default: one chosen from the body's id).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub color: Option<HexColor>,
+    /// Pose relative to the supart (`None`: identity).
+    pub pose: Option<Pose>,
+    /// Material colour (`None`: one chosen from the body's id).
+    #[serde(default, with = "hex::maybe", skip_serializing_if = "Option::is_none")]
+    pub color: Option<Color>,
     /// The solid.
     pub shape: Shape,
 }
 
-/// `PATCH /v1/bodies/{id}`: any of name, parent, pose and colour. `"name": null` removes
-/// the name; `"color": null` restores the default colour.
+/// Change any of a body's name, supart, pose and colour.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Default)]
-#[serde(deny_unknown_fields)]
 pub struct PatchBody {
-    /// New name; `null` to remove it. Absent (not `null`) when written out with no
-    /// change of name, so that it reads back as no change.
+    /// New name, `Some(None)` to remove it; `None` (absent) for no change.
     #[serde(
         default,
         deserialize_with = "some_or_null",
@@ -218,15 +180,14 @@ pub struct PatchBody {
     pub parent: Option<u64>,
     /// New pose relative to the supart.
     #[serde(default)]
-    pub pose: Option<PoseDto>,
-    /// New material colour `"#rrggbb"`; `null` restores the default. Absent when
-    /// written out with no change of colour.
+    pub pose: Option<Pose>,
+    /// New colour, `Some(None)` for the default; `None` (absent) for no change.
     #[serde(
         default,
-        deserialize_with = "some_or_null",
+        with = "hex::maybe_maybe",
         skip_serializing_if = "Option::is_none"
     )]
-    pub color: Option<Option<HexColor>>,
+    pub color: Option<Option<Color>>,
 }
 
 fn some_or_null<'de, D, T>(d: D) -> Result<Option<Option<T>>, D::Error>
@@ -237,94 +198,140 @@ where
     Option::<T>::deserialize(d).map(Some)
 }
 
-/// `POST /v1/bodies/{id}/euler`: one Euler operator, by its Baumgart name.
+/// Colours as `"#rrggbb"` strings.
+mod hex {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    use crate::model::Color;
+
+    fn read<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Color>, D::Error> {
+        match Option::<String>::deserialize(d)? {
+            None => Ok(None),
+            Some(text) => Color::from_hex(&text).map(Some).ok_or_else(|| {
+                serde::de::Error::custom(format!("colour {text:?} is not \"#rrggbb\""))
+            }),
+        }
+    }
+
+    /// `Option<Color>`: a string or `null`.
+    pub mod maybe {
+        use super::*;
+
+        pub fn serialize<S: Serializer>(c: &Option<Color>, s: S) -> Result<S::Ok, S::Error> {
+            match c {
+                Some(c) => s.serialize_str(&c.to_hex()),
+                None => s.serialize_none(),
+            }
+        }
+
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Color>, D::Error> {
+            read(d)
+        }
+    }
+
+    /// `Option<Option<Color>>`: absent (no change), `null` or a string.
+    pub mod maybe_maybe {
+        use super::*;
+
+        pub fn serialize<S: Serializer>(
+            c: &Option<Option<Color>>,
+            s: S,
+        ) -> Result<S::Ok, S::Error> {
+            maybe::serialize(&c.flatten(), s)
+        }
+
+        pub fn deserialize<'de, D: Deserializer<'de>>(
+            d: D,
+        ) -> Result<Option<Option<Color>>, D::Error> {
+            read(d).map(Some)
+        }
+    }
+}
+
+/// One Euler operator, by its Baumgart name, on entities named by serial.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "op", rename_all = "snake_case")]
 pub enum EulerOp {
-    /// MKEV: a spur from `vertex` into `face`, its new vertex at `position` (default: at
+    /// MKEV: a spur from `vertex` into `face`, its new vertex at `position` (`None`: at
     /// `vertex`).
     Mkev {
-        /// Face id.
+        /// Face.
         face: u64,
-        /// Vertex id.
+        /// Vertex.
         vertex: u64,
         /// Locus of the new vertex.
-        #[serde(default)]
-        position: Option<[f64; 3]>,
+        position: Option<DVec3>,
     },
-    /// MKFE: split `face` by a new edge from `v1` to `v2`.
+    /// MKFE: split `face` by a new edge from `v1` (its PVT) to `v2`.
     Mkfe {
-        /// First vertex id (the new edge's PVT).
+        /// First vertex.
         v1: u64,
-        /// Face id.
+        /// Face.
         face: u64,
-        /// Second vertex id.
+        /// Second vertex.
         v2: u64,
     },
-    /// ESPLIT: split `edge` at `position` (default: its midpoint).
+    /// ESPLIT: split `edge` at `position` (`None`: its midpoint).
     Esplit {
-        /// Edge id.
+        /// Edge.
         edge: u64,
         /// Locus of the new vertex.
-        #[serde(default)]
-        position: Option<[f64; 3]>,
+        position: Option<DVec3>,
     },
     /// KLFE: kill `edge` and its NFACE.
     Klfe {
-        /// Edge id.
+        /// Edge.
         edge: u64,
     },
     /// KLEV: kill `vertex` (one or two edges) and its PED.
     Klev {
-        /// Vertex id.
+        /// Vertex.
         vertex: u64,
     },
-    /// KLVE: kill `edge` and its NVT (contract it).
+    /// KLVE: kill `edge` and its NVT.
     Klve {
-        /// Edge id.
+        /// Edge.
         edge: u64,
     },
     /// INVERT: turn `edge` round.
     Invert {
-        /// Edge id.
+        /// Edge.
         edge: u64,
     },
     /// GLUE: identify `face2` (of this or another body) with `face1`, pairing `vertex1`
-    /// with `vertex2` (default: the first vertex of `face1` with the nearest of `face2`).
+    /// with `vertex2` (`None`: the first vertex of `face1` with the nearest of `face2`).
     Glue {
-        /// Face id in this body.
+        /// Face of this body.
         face1: u64,
-        /// Face id in this or another body.
+        /// Face of this or another body.
         face2: u64,
         /// Vertex of `face1`.
-        #[serde(default)]
         vertex1: Option<u64>,
         /// Vertex of `face2`.
-        #[serde(default)]
         vertex2: Option<u64>,
     },
     /// GLUEE: a wasp edge from `vertex1` on `face1` to `vertex2` on `face2`, killing
     /// `face2`.
     Gluee {
-        /// Face id in this body.
+        /// Face of this body.
         face1: u64,
         /// Vertex of `face1`.
         vertex1: u64,
-        /// Face id in this or another body.
+        /// Face of this or another body.
         face2: u64,
         /// Vertex of `face2`.
         vertex2: u64,
     },
     /// GLUEFF: a tube of quadrilaterals between `face1` and `face2`.
     Glueff {
-        /// Face id in this body.
+        /// Face of this body.
         face1: u64,
-        /// Face id in this or another body.
+        /// Face of this or another body.
         face2: u64,
     },
     /// UNGLUE: cut along the closed loop of `edges`.
     Unglue {
-        /// Edge ids forming one closed loop.
+        /// Edges forming one closed loop.
         edges: Vec<u64>,
     },
 }
@@ -341,69 +348,79 @@ impl EulerOp {
     }
 }
 
-/// What to move in `POST /v1/bodies/{id}/transform`.
+/// A Euclidean motion, its numbers in the frame a [`Move`] names.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(tag = "op", rename_all = "snake_case")]
-pub enum TransformOp {
+pub enum Motion {
     /// TRANSLATE by `vector`.
     Translate {
         /// The displacement.
-        vector: [f64; 3],
+        vector: DVec3,
     },
-    /// ROTATE by `angle_deg` about `axis` through `center`.
+    /// ROTATE by `angle_deg` about `axis` through `center` (right-hand rule).
     Rotate {
         /// Axis direction.
-        axis: [f64; 3],
-        /// Angle in degrees (right-hand rule).
+        axis: DVec3,
+        /// Angle in degrees.
         angle_deg: f64,
-        /// A point on the axis (default: the frame's origin).
+        /// A point on the axis (read as the origin when missing).
         #[serde(default)]
-        center: [f64; 3],
+        center: DVec3,
     },
     /// DILATE by `factor` about `center`.
     Dilate {
-        /// Scale factor, > 0.
+        /// Scale factor.
         factor: f64,
-        /// Fixed point (default: the frame's origin).
+        /// Fixed point (read as the origin when missing).
         #[serde(default)]
-        center: [f64; 3],
+        center: DVec3,
     },
     /// REFLECT in the plane through `point` with `normal`.
     Reflect {
         /// Plane normal.
-        normal: [f64; 3],
-        /// A point of the plane (default: the frame's origin).
+        normal: DVec3,
+        /// A point of the plane (read as the origin when missing).
         #[serde(default)]
-        point: [f64; 3],
+        point: DVec3,
     },
 }
 
-/// The frame a transform's numbers are given in.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum FrameDto {
-    /// World coordinates.
-    #[default]
-    World,
-    /// The body's own coordinates.
-    Body,
-}
-
-/// `POST /v1/bodies/{id}/transform`.
+/// A motion of a body, or of one of its faces, edges or vertices.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct TransformReq {
-    /// The transform.
+pub struct Move {
+    /// The motion.
     #[serde(flatten)]
-    pub op: TransformOp,
-    /// `world` (default) or `body`.
-    #[serde(default)]
-    pub frame: FrameDto,
-    /// A face, edge or vertex id of the body to move instead of the whole body.
-    #[serde(default)]
+    pub motion: Motion,
+    /// The frame its numbers are in (read as the world's when missing).
+    #[serde(default, with = "frame")]
+    pub frame: Frame,
+    /// A face, edge or vertex of the body to move instead of the whole body.
     pub target: Option<u64>,
 }
 
-/// The sweep primitives of `POST /v1/bodies/{id}/sweep`.
+/// [`Frame`]s as `"world"` or `"body"`.
+mod frame {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    use crate::model::Frame;
+
+    pub fn serialize<S: Serializer>(f: &Frame, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(match f {
+            Frame::World => "world",
+            Frame::Body => "body",
+        })
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Frame, D::Error> {
+        match String::deserialize(d)?.as_str() {
+            "world" => Ok(Frame::World),
+            "body" => Ok(Frame::Body),
+            other => Err(serde::de::Error::unknown_variant(other, &["world", "body"])),
+        }
+    }
+}
+
+/// The sweep primitives.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum SweepKind {
@@ -417,110 +434,68 @@ pub enum SweepKind {
     CcwPrismoid,
 }
 
-/// `POST /v1/bodies/{id}/sweep`.
+/// A sweep of one face of a body.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct SweepReq {
+pub struct Sweep {
     /// The face swept.
     pub face: u64,
     /// Which sweep.
     pub kind: SweepKind,
-    /// How far along the face's outward normal (prisms: the offset; pyramid: the peak's
-    /// height over the face centre). Ignored when `offset` or `peak` is given.
-    #[serde(default)]
+    /// How far along the face's outward normal, when neither `offset` nor `peak` is
+    /// given (`None`: 1).
     pub distance: Option<f64>,
-    /// The sweep's offset vector (prisms), body frame.
-    #[serde(default)]
-    pub offset: Option<[f64; 3]>,
+    /// The offset of the new ring (prisms), body frame.
+    pub offset: Option<DVec3>,
     /// The peak (pyramid), body frame.
-    #[serde(default)]
-    pub peak: Option<[f64; 3]>,
-    /// Scale of the new ring about the face centre (prisms; default 1).
-    #[serde(default)]
+    pub peak: Option<DVec3>,
+    /// Scale of the new ring about the face centre (prisms; `None`: 1).
     pub scale: Option<f64>,
 }
 
-/// `POST /v1/bodies/{id}/copy`.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Default)]
-#[serde(deny_unknown_fields)]
-pub struct CopyReq {
-    /// The copy's name.
-    #[serde(default)]
-    pub name: Option<String>,
+/// Where a camera stands and looks: a pose, or an eye looking at a target.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct LookAt {
+    /// Lens centre.
+    pub eye: DVec3,
+    /// Point looked at.
+    pub target: DVec3,
+    /// Up direction (read as +z when missing).
+    #[serde(default = "up_z")]
+    pub up: DVec3,
 }
 
-/// Camera intrinsics in pixels.
+/// Baumgart's camera raster, as [`BaumgartRaster`].
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct IntrinsicsDto {
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-    /// Focal length along u.
-    pub fx: f64,
-    /// Focal length along v.
-    pub fy: f64,
-    /// Principal point u.
-    pub cx: f64,
-    /// Principal point v.
-    pub cy: f64,
-}
-
-/// Baumgart's camera raster: FOCAL (mm), logical raster LDX × LDY, physical PDX × PDY.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct BaumgartDto {
-    /// Focal length.
+pub struct Raster {
+    /// FOCAL.
     pub focal: f64,
-    /// Logical raster width (pixels).
+    /// LDX.
     pub ldx: u32,
-    /// Logical raster height (pixels).
+    /// LDY.
     pub ldy: u32,
-    /// Physical raster width (same unit as focal).
+    /// PDX.
     pub pdx: f64,
-    /// Physical raster height.
+    /// PDY.
     pub pdy: f64,
 }
 
-/// The look-at helper: a camera at `eye` looking at `target`, `up` roughly up.
+/// A camera as a write describes it: exactly one of `pose` and `look_at`, and exactly
+/// one of `intrinsics` and `baumgart`.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct LookAtDto {
-    /// Lens centre.
-    pub eye: [f64; 3],
-    /// Point looked at.
-    pub target: [f64; 3],
-    /// Up direction (default +z).
-    #[serde(default = "up_z")]
-    pub up: [f64; 3],
-}
-
-fn up_z() -> [f64; 3] {
-    [0.0, 0.0, 1.0]
-}
-
-/// `PUT /v1/cameras/{name}`: a pose or a look-at, and intrinsics or Baumgart's raster.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct CameraReq {
-    /// Pose in the world (camera looks along its −k axis).
-    #[serde(default)]
-    pub pose: Option<PoseDto>,
+pub struct CameraSpec {
+    /// Pose in the world (the camera looks along its −k axis).
+    pub pose: Option<Pose>,
     /// Or: where it stands and what it looks at.
-    #[serde(default)]
-    pub look_at: Option<LookAtDto>,
+    pub look_at: Option<LookAt>,
     /// Intrinsics in pixels.
-    #[serde(default)]
-    pub intrinsics: Option<IntrinsicsDto>,
-    /// Or: Baumgart's form.
-    #[serde(default)]
-    pub baumgart: Option<BaumgartDto>,
+    pub intrinsics: Option<Intrinsics>,
+    /// Or: Baumgart's raster.
+    pub baumgart: Option<Raster>,
 }
 
-/// Why a camera request is not a camera.
+/// Why a camera description is not a camera.
 #[derive(Debug, thiserror::Error)]
-pub enum CameraReqError {
+pub enum CameraSpecError {
     /// Neither or both of pose and look_at.
     #[error("give exactly one of \"pose\" and \"look_at\"")]
     Placement,
@@ -532,9 +507,9 @@ pub enum CameraReqError {
     Camera(#[from] CameraError),
 }
 
-impl CameraReq {
-    /// The camera described.
-    pub fn to_camera(&self) -> Result<Camera, CameraReqError> {
+impl CameraSpec {
+    /// The camera described, checked.
+    pub fn to_camera(&self) -> Result<Camera, CameraSpecError> {
         let intrinsics = match (self.intrinsics, self.baumgart) {
             (Some(i), None) => Intrinsics::new(i.width, i.height, i.fx, i.fy, i.cx, i.cy)?,
             (None, Some(b)) => Intrinsics::from_baumgart(&BaumgartRaster {
@@ -544,85 +519,50 @@ impl CameraReq {
                 pdx: b.pdx,
                 pdy: b.pdy,
             })?,
-            _ => return Err(CameraReqError::Lens),
+            _ => return Err(CameraSpecError::Lens),
         };
         match (self.pose, self.look_at) {
-            (Some(p), None) => Ok(Camera::new(p.to_pose(), intrinsics)?),
-            (None, Some(l)) => Ok(Camera::look_at(
-                DVec3::from_array(l.eye),
-                DVec3::from_array(l.target),
-                DVec3::from_array(l.up),
-                intrinsics,
-            )?),
-            _ => Err(CameraReqError::Placement),
+            (Some(p), None) => Ok(Camera::new(p, intrinsics)?),
+            (None, Some(l)) => Ok(Camera::look_at(l.eye, l.target, l.up, intrinsics)?),
+            _ => Err(CameraSpecError::Placement),
         }
     }
 }
 
-/// `PUT /v1/lights/{name}`: a sun (direction the light travels) or a point lamp.
+/// A light as a write describes it.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum LightDto {
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum LightSpec {
     /// Light at infinity.
     Sun {
-        /// Direction the light travels (a noon sun is `[0, 0, -1]`).
-        direction: [f64; 3],
-        /// Intensity ≥ 0 (default 1).
+        /// Direction the light travels.
+        direction: DVec3,
+        /// Intensity (read as 1 when missing).
         #[serde(default = "one")]
         intensity: f64,
     },
     /// A point lamp.
     Point {
         /// Where it is.
-        position: [f64; 3],
-        /// Intensity ≥ 0 (default 1).
+        position: DVec3,
+        /// Intensity (read as 1 when missing).
         #[serde(default = "one")]
         intensity: f64,
     },
 }
 
-fn one() -> f64 {
-    1.0
-}
-
-impl LightDto {
-    /// The kernel light (not yet validated).
-    pub fn to_light(self) -> Result<Light, crate::model::LightError> {
+impl LightSpec {
+    /// The light described, checked.
+    pub fn to_light(self) -> Result<Light, LightError> {
         match self {
-            LightDto::Sun {
+            LightSpec::Sun {
                 direction,
                 intensity,
-            } => Light::sun(DVec3::from_array(direction), intensity),
-            LightDto::Point {
+            } => Light::sun(direction, intensity),
+            LightSpec::Point {
                 position,
                 intensity,
-            } => Light::point(DVec3::from_array(position), intensity),
+            } => Light::point(position, intensity),
         }
     }
-}
-
-impl From<&Light> for LightDto {
-    fn from(l: &Light) -> Self {
-        match *l {
-            Light::Sun {
-                direction,
-                intensity,
-            } => LightDto::Sun {
-                direction: direction.to_array(),
-                intensity,
-            },
-            Light::Point {
-                position,
-                intensity,
-            } => LightDto::Point {
-                position: position.to_array(),
-                intensity,
-            },
-        }
-    }
-}
-
-/// Converts a `[x, y]` list to glam points.
-pub fn points2(p: &[[f64; 2]]) -> Vec<DVec2> {
-    p.iter().map(|&q| DVec2::from_array(q)).collect()
 }

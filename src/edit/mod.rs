@@ -3,10 +3,14 @@
 //! [`command`] holds what a write asks for (a shape, an Euler operator, a transform, a
 //! camera, a light) in the serde form the journal stores; [`apply`](mod@apply) holds the
 //! [`Edit`] that names one write and the [`apply`](fn@apply) that carries it out or refuses
-//! it, changing nothing. The store journals edits and replays them through this module;
-//! the HTTP layer turns requests into them. Neither is imported here.
+//! it, changing nothing; [`plan`](mod@plan) splits that in two, the work that needs no
+//! world (done anywhere, e.g. beside the world's owner) and the rest. The store journals
+//! edits and replays them through this module; the HTTP layer turns requests into them.
+//! Neither is imported here.
 
 pub mod apply;
 pub mod command;
+pub mod plan;
 
 pub use apply::{Edit, EditError, MAX_BODY_FACES, Outcome, apply};
+pub use plan::{HEAVY_FACES, Planned, plan};

@@ -186,6 +186,23 @@ impl<T> Arena<T> {
         self.index_slots = pairs.iter().map(|p| p.1).collect();
     }
 
+    /// Adds `delta` to every serial this arena holds, in its slots and its index alike;
+    /// dead slots stay dead. The index stays sorted, every entry moving by the same
+    /// amount, so this is one linear pass and no sort.
+    ///
+    /// Precondition: no serial plus `delta` overflows. Postcondition: the entity that
+    /// carried serial `s` carries `s + delta`, in the same slot.
+    pub(crate) fn shift_serials(&mut self, delta: u64) {
+        for s in &mut self.serials {
+            if *s != Serial::NONE {
+                s.0 += delta;
+            }
+        }
+        for s in &mut self.index_serials {
+            s.0 += delta;
+        }
+    }
+
     /// Reserves room for `n` more entities.
     pub fn reserve(&mut self, n: usize) {
         self.items.reserve(n);

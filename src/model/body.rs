@@ -130,6 +130,15 @@ impl Body {
         Self::default()
     }
 
+    /// Adds `delta` to the serial of every face, edge and vertex (see
+    /// [`Arena::shift_serials`]): how a body numbered from 1 apart from the world takes
+    /// its place in the world's serials. Slots and records are unchanged.
+    pub(crate) fn shift_serials(&mut self, delta: u64) {
+        self.faces.shift_serials(delta);
+        self.edges.shift_serials(delta);
+        self.vertices.shift_serials(delta);
+    }
+
     /// Number of live faces.
     #[inline]
     pub fn face_count(&self) -> usize {

@@ -42,8 +42,10 @@ pub enum PoseError {
 /// Invariant (kept by [`Pose::new`] and every operation here): both parts are finite and
 /// `rotation` is a unit quaternion. The fields are public for reading and for building
 /// constant poses; a pose assembled by hand from untrusted numbers should go through
-/// [`Pose::new`] or [`Pose::validated`].
+/// [`Pose::new`] or [`Pose::validated`]. Read from serde, a missing part is the
+/// identity's.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Pose {
     /// The child frame's origin, in the parent frame (meters).
     pub position: DVec3,

@@ -14,17 +14,22 @@
 //! body it changes. The newest snapshot is also kept where handlers can take it without
 //! queueing, until the next write.
 //!
+//! An edit is planned before it is queued ([`crate::edit::plan`]): the work that needs
+//! no world runs on the requester's task, or, for a large body, on a blocking thread (at
+//! most one per core), so the owner only inserts what was built and other writes are not
+//! held up behind the build.
+//!
 //! When the queue is full, writes are refused at once with [`WriteError::Busy`] (the HTTP
 //! layer answers 503 with `Retry-After`) rather than queued without bound.
 
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use tokio::sync::{mpsc, oneshot};
+use tokio::sync::{Semaphore, mpsc, oneshot};
 
 use super::changes::{self, Change};
 use super::events::Feed;
-use crate::edit::{Edit, EditError, Outcome, apply};
+use crate::edit::{Edit, EditError, Outcome, Planned, plan};
 use crate::model::World;
 
 /// How many requests may wait for the owner by default.
@@ -136,6 +141,8 @@ pub trait Observer: Send + Sync + 'static {
     fn overloaded(&self);
     /// A snapshot of `bytes` was written in `elapsed`.
     fn snapshotted(&self, _elapsed: Duration, _bytes: u64) {}
+    /// Edits being planned beside the owner went up (`+1`) or down (`-1`).
+    fn planning(&self, _change: i64) {}
 }
 
 /// An observer that ignores everything.
@@ -150,7 +157,7 @@ impl Observer for Unobserved {
 enum Command {
     /// Apply an edit (if the world is at `expected`) and answer once it is durable.
     Apply {
-        edit: Box<Edit>,
+        planned: Planned,
         expected: Option<u64>,
         reply: oneshot::Sender<Result<Applied, WriteError>>,
     },
@@ -208,9 +215,27 @@ type Latest = Arc<Mutex<Option<Arc<World>>>>;
 #[derive(Clone)]
 pub struct Handle {
     tx: mpsc::Sender<Command>,
+    /// Turns for planning large edits on blocking threads: one per core.
+    planners: Arc<Semaphore>,
     latest: Latest,
     observer: Arc<dyn Observer>,
     failure: Failure,
+}
+
+/// One edit being planned beside the owner, counted by the observer while it lasts.
+struct Planning(Arc<dyn Observer>);
+
+impl Planning {
+    fn start(observer: Arc<dyn Observer>) -> Self {
+        observer.planning(1);
+        Planning(observer)
+    }
+}
+
+impl Drop for Planning {
+    fn drop(&mut self) {
+        self.0.planning(-1);
+    }
 }
 
 /// Why the owner refuses writes for good, once its storage failed beyond repair.
@@ -218,11 +243,13 @@ type Failure = Arc<Mutex<Option<String>>>;
 
 impl Handle {
     /// Applies `edit` if the world's revision is `expected` (any revision when `None`),
-    /// and answers once it is durable.
+    /// and answers once it is durable. The edit is planned first (a large body is built
+    /// on a blocking thread), then queued for the owner.
     pub async fn apply_if(&self, edit: Edit, expected: Option<u64>) -> Result<Applied, WriteError> {
+        let planned = self.plan(edit).await?;
         let (reply, rx) = oneshot::channel();
         let cmd = Command::Apply {
-            edit: Box::new(edit),
+            planned,
             expected,
             reply,
         };
@@ -235,6 +262,34 @@ impl Handle {
             Err(mpsc::error::TrySendError::Closed(_)) => return Err(WriteError::Stopped),
         }
         rx.await.map_err(|_| WriteError::Stopped)?
+    }
+
+    /// Plans `edit`: here if it is light, else on a blocking thread once one of the
+    /// planners' turns is free. A requester that stops waiting does not stop a build
+    /// under way; its turn is given back when the build ends.
+    async fn plan(&self, edit: Edit) -> Result<Planned, WriteError> {
+        let edit = Box::new(edit);
+        if !edit.is_heavy() {
+            return plan(edit).map_err(WriteError::Refused);
+        }
+        let turn = self
+            .planners
+            .clone()
+            .acquire_owned()
+            .await
+            .map_err(|_| WriteError::Stopped)?;
+        let counted = Planning::start(self.observer.clone());
+        let built = tokio::task::spawn_blocking(move || {
+            let _turn = turn;
+            let _counted = counted;
+            plan(edit)
+        })
+        .await;
+        match built {
+            Ok(planned) => planned.map_err(WriteError::Refused),
+            Err(e) if e.is_panic() => std::panic::resume_unwind(e.into_panic()),
+            Err(_) => Err(WriteError::Stopped),
+        }
     }
 
     /// Applies `edit` whatever the world's revision.
@@ -333,8 +388,10 @@ pub fn spawn<J: Journal>(
     let thread = std::thread::Builder::new()
         .name("world-owner".into())
         .spawn(move || owner.run(rx))?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let handle = Handle {
         tx,
+        planners: Arc::new(Semaphore::new(cores)),
         latest,
         observer,
         failure,
@@ -409,10 +466,10 @@ impl<J: Journal> Owner<J> {
         for cmd in batch.drain(..) {
             match cmd {
                 Command::Apply {
-                    edit,
+                    planned,
                     expected,
                     reply,
-                } => match self.apply_one(edit, expected, reply) {
+                } => match self.apply_one(planned, expected, reply) {
                     Some(Step::Changed(p)) => pending.push(p),
                     Some(Step::Unchanged(reply, outcome)) => unchanged.push((reply, outcome)),
                     None => {}
@@ -453,7 +510,7 @@ impl<J: Journal> Owner<J> {
     /// without a journal entry or a change.
     fn apply_one(
         &mut self,
-        edit: Box<Edit>,
+        planned: Planned,
         expected: Option<u64>,
         reply: oneshot::Sender<Result<Applied, WriteError>>,
     ) -> Option<Step> {
@@ -473,8 +530,9 @@ impl<J: Journal> Owner<J> {
             let _ = reply.send(Err(WriteError::Conflict { expected, actual }));
             return None;
         }
-        let before = changes::before(&self.world, &edit);
-        match apply(&mut self.world, &edit) {
+        let before = changes::before(&self.world, planned.edit());
+        let (edit, outcome) = planned.apply(&mut self.world);
+        match outcome {
             Ok(outcome) if self.world.revision() == actual => Some(Step::Unchanged(reply, outcome)),
             Ok(outcome) => {
                 let revision = self.world.revision();

@@ -12,7 +12,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::dto::TransformOp;
+use crate::edit::command::Motion;
 use crate::edit::{Edit, Outcome};
 use crate::model::{BodyId, Serial, World};
 
@@ -250,12 +250,12 @@ pub fn describe(
                 );
             }
         }
-        Edit::Transform { body, req } => {
+        Edit::Transform { body, motion } => {
             let rigid = matches!(
-                req.op,
-                TransformOp::Translate { .. } | TransformOp::Rotate { .. }
+                motion.motion,
+                Motion::Translate { .. } | Motion::Rotate { .. }
             );
-            let field = if req.target.is_none() && rigid {
+            let field = if motion.target.is_none() && rigid {
                 Field::Pose
             } else {
                 Field::Geometry

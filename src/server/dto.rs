@@ -1,12 +1,11 @@
 //! The JSON shapes of the HTTP API's answers, and their conversions from the kernel's
-//! types. The commands a request carries are the edit language's
-//! ([`crate::edit::command`]), re-exported here for the handlers.
+//! types. What a write request carries is read by [`super::request`].
 
 use serde::{Deserialize, Serialize};
 
 use crate::model::{Body, Camera, geometry::Bounds};
 
-pub use crate::edit::command::*;
+use super::request::{HexColor, IntrinsicsDto, PoseDto};
 
 /// A camera as answered.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]

@@ -103,6 +103,7 @@ pub struct Metrics {
     requests: Family<RequestLabels, Counter>,
     request_duration: HistogramFamily,
     queue_depth: Gauge,
+    edits_planning: Gauge,
     commit_duration: Histogram,
     batch_entries: Histogram,
     overload_rejections: Counter,
@@ -159,6 +160,12 @@ impl Metrics {
             "winged_actor_queue_depth",
             "Edits waiting for the world's owner",
             queue_depth.clone(),
+        );
+        let edits_planning = Gauge::default();
+        registry.register(
+            "winged_edits_planning",
+            "Large edits being planned (their bodies built) beside the world's owner",
+            edits_planning.clone(),
         );
         // 10 µs .. 10 s.
         let commit_duration = Histogram::new(exponential_buckets_range(0.000_01, 10.0, 19));
@@ -248,6 +255,7 @@ impl Metrics {
             requests,
             request_duration,
             queue_depth,
+            edits_planning,
             commit_duration,
             batch_entries,
             overload_rejections,
@@ -423,6 +431,9 @@ impl super::actor::Observer for Metrics {
     }
     fn snapshotted(&self, elapsed: Duration, _bytes: u64) {
         self.observe_snapshot(elapsed);
+    }
+    fn planning(&self, change: i64) {
+        self.edits_planning.inc_by(change);
     }
 }
 

@@ -24,6 +24,7 @@ pub mod limits;
 pub mod listen;
 pub mod metrics;
 pub mod problem;
+pub mod request;
 pub mod spec;
 
 use std::net::SocketAddr;

@@ -21,8 +21,14 @@ use super::entry::Entry;
 use super::error::StoreError;
 use super::{Durability, StoreOptions};
 
-/// The journal format this build writes and the newest it reads.
+/// The journal format this build writes and the newest it reads: the tables above, each
+/// entry's edit in the serde form of the edit language's version
+/// [`crate::edit::command::FORMAT`]. A new form of either is a new version.
 pub const FORMAT_VERSION: i64 = 1;
+const _: () = assert!(
+    FORMAT_VERSION == crate::edit::command::FORMAT as i64,
+    "the journal's version names the edits' serde form"
+);
 /// The journal's file name inside a data directory.
 pub const FILE_NAME: &str = "journal.db";
 /// Entries deleted per transaction by [`Journal::prune_through`], so that pruning never

@@ -156,8 +156,8 @@ impl<'de> Visitor<'de> for Face<'_> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::bounded::{Exceeded, watch};
     use super::*;
-    use crate::server::dto::bounded::{Exceeded, watch};
 
     #[test]
     fn faces_round_trip_through_json() {

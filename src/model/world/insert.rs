@@ -99,18 +99,36 @@ impl World {
     where
         WorldError: From<E>,
     {
+        self.check_insert(name, supart, pose)?;
+        let built = Built::new(|s| build(s).map_err(WorldError::from))?;
+        self.insert_built(built, name, supart, pose, color)
+    }
+
+    /// Inserts a body made by [`Built::new`] as [`World::insert_colored_with`] would
+    /// have built and inserted it here: the body's own serial is taken first, then its
+    /// faces, edges and vertices take the next serials in the order they were numbered
+    /// apart. So the same build gives the same ids whether it ran inside the world's
+    /// owner or beside it. Costs one pass over the body's serials; nothing is rebuilt or
+    /// checked again but the placement.
+    ///
+    /// Refused, taking no serials, when `supart` is unknown, the name is bad or taken, or
+    /// the pose is not finite or would place the body beyond the world's range.
+    /// Inverse: [`World::kill`].
+    pub fn insert_built(
+        &mut self,
+        built: Built,
+        name: Option<&str>,
+        supart: BodyId,
+        pose: Pose,
+        color: Option<Color>,
+    ) -> Result<BodyId, WorldError> {
         let (name, pose) = self.check_insert(name, supart, pose)?;
-        let mut serials = self.serials.clone();
-        let id = BodyId(serials.take());
-        let from = serials.peek();
-        let body = build(&mut serials)?;
-        check_geometry_input(&body)?;
-        let body = if serials_fresh(&body, from, serials.peek()) {
-            body
-        } else {
-            renumber(&body, &mut serials)
-        };
-        self.serials = serials;
+        let id = BodyId(self.serials.take());
+        let Built { mut body, taken } = built;
+        body.shift_serials(id.get());
+        if taken > 0 {
+            self.serials.skip_past(Serial(id.get() + taken));
+        }
         self.tree.add(id, name, supart, pose, Arc::new(body));
         self.tree.get_mut(id).expect("just added").color = color;
         self.written();
@@ -172,5 +190,105 @@ impl World {
             }
         }
         Ok(())
+    }
+}
+
+/// A body built apart from any world and checked, its serials numbered from 1: the part
+/// of an insertion whose cost grows with the body, done before the world is touched so
+/// that it can run beside the world's owner. [`World::insert_built`] places it.
+#[derive(Debug, Clone)]
+pub struct Built {
+    body: Body,
+    /// Serials the build took (the body's entities carry serials in `1..=taken`).
+    taken: u64,
+}
+
+impl Built {
+    /// Builds a body with a counter of its own and checks it as [`World::insert`]
+    /// would: topology ([`check_topology`]) and loci (finite, within the world's range).
+    /// Serials the builder did not take from the counter it was given are renumbered
+    /// after the ones it took, in the order of their old values.
+    ///
+    /// Refused with `build`'s own error, or when the body fails those checks (a
+    /// [`WorldError`] converted into `build`'s error type).
+    pub fn new<E>(build: impl FnOnce(&mut Serials) -> Result<Body, E>) -> Result<Built, E>
+    where
+        E: From<WorldError>,
+    {
+        let mut serials = Serials::new();
+        let from = serials.peek();
+        let body = build(&mut serials)?;
+        check_geometry_input(&body)?;
+        let body = if serials_fresh(&body, from, serials.peek()) {
+            body
+        } else {
+            renumber(&body, &mut serials)
+        };
+        Ok(Built {
+            taken: serials.peek().0 - from.0,
+            body,
+        })
+    }
+
+    /// The body, numbered from 1.
+    pub fn body(&self) -> &Body {
+        &self.body
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::solids::sphere;
+
+    /// The serials of every face, edge and vertex, slot by slot.
+    fn serials(body: &Body) -> Vec<u64> {
+        let mut out: Vec<u64> = body.faces().map(|f| body.face_serial(f).get()).collect();
+        out.extend(body.edges().map(|e| body.edge_serial(e).get()));
+        out.extend(body.vertices().map(|v| body.vertex_serial(v).get()));
+        out
+    }
+
+    #[test]
+    fn a_body_built_apart_is_numbered_as_if_built_in_the_world() {
+        let mut world = World::new();
+        world.mkbfv(DVec3::ZERO).expect("a seminal body");
+        world.mkbfv(DVec3::X).expect("another");
+        // Built with the world's own counter, after the body's serial.
+        let mut counter = world.serials.clone();
+        let id = counter.take();
+        let direct = sphere(&mut counter, 1.0, 12, 6).expect("a sphere");
+
+        let built =
+            Built::new(|s| sphere(s, 1.0, 12, 6).map_err(WorldError::from)).expect("built apart");
+        assert_eq!(serials(built.body()).iter().min(), Some(&1));
+        let b = world
+            .insert_built(built, Some("ball"), world.root(), Pose::IDENTITY, None)
+            .expect("inserted");
+        assert_eq!(b.0, id);
+        let placed = world.body(b).expect("live");
+        assert_eq!(serials(placed), serials(&direct));
+        assert_eq!(world.serials.peek(), counter.peek());
+        for f in placed.faces() {
+            let s = placed.face_serial(f);
+            assert_eq!(placed.face_by_serial(s), Some(f), "found by its serial");
+        }
+        assert!(check_topology(placed).is_ok());
+    }
+
+    #[test]
+    fn a_refused_insertion_takes_no_serials() {
+        let mut world = World::new();
+        world.mkbfv(DVec3::ZERO).expect("a seminal body");
+        let next = world.serials.peek();
+        let built =
+            Built::new(|s| sphere(s, 1.0, 12, 6).map_err(WorldError::from)).expect("built apart");
+        let unknown = BodyId(Serial(999));
+        assert!(
+            world
+                .insert_built(built, None, unknown, Pose::IDENTITY, None)
+                .is_err()
+        );
+        assert_eq!(world.serials.peek(), next);
     }
 }

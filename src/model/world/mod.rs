@@ -52,6 +52,8 @@ mod named;
 mod read;
 mod tree;
 
+pub use insert::Built;
+
 /// Why a world operation was refused. The world is unchanged.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum WorldError {

@@ -28,8 +28,8 @@ use crate::camera::Camera;
 use crate::model::World;
 use crate::render::hidden::{self, Segment};
 use crate::render::{self, Mode, Options, Picture, SHADED_BACKGROUND, Scene};
-use crate::server::dto::CameraReq;
 use crate::server::problem::Problem;
+use crate::server::request::CameraReq;
 
 /// The largest image drawn by default, in pixels (4096 × 4096).
 pub const MAX_RENDER_PIXELS: u64 = 4096 * 4096;

@@ -31,7 +31,7 @@ use futures_util::StreamExt as _;
 use serde::de::DeserializeOwned;
 use tokio::sync::{OwnedSemaphorePermit, Semaphore};
 
-use crate::server::dto::bounded::{Exceeded, watch};
+use crate::edit::command::bounded::{Exceeded, watch};
 use crate::server::problem::Problem;
 
 /// Bodies up to this many bytes are parsed on the async worker that read them; larger
@@ -246,7 +246,7 @@ pub fn from_json<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, Problem> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::server::dto::CreateBody;
+    use crate::server::request::CreateBody;
 
     fn request(content_length: Option<usize>, body: Vec<u8>) -> Request {
         let mut b = axum::http::Request::builder().method("POST").uri("/");
@@ -303,7 +303,7 @@ mod tests {
     #[test]
     fn too_many_faces_are_too_large_and_bad_json_is_a_bad_request() {
         let mut text = String::from(r#"{"shape":{"type":"polyhedron","vertices":[],"faces":["#);
-        for _ in 0..=crate::server::dto::MAX_BODY_FACES {
+        for _ in 0..=crate::server::request::MAX_BODY_FACES {
             text.push_str("[],");
         }
         let p = from_json::<CreateBody>(text.as_bytes()).expect_err("refused");

@@ -76,15 +76,16 @@ use super::extract::ApiJson;
 use super::precondition::etag;
 use super::{Answer, AppState, snapshot};
 use crate::edit::Edit;
+use crate::edit::command::CameraSpec;
 use crate::model::camera::{Camera, Intrinsics};
 use crate::model::{Serial, World};
 use crate::server::actor::Applied;
 use crate::server::auth::Role;
-use crate::server::dto::{CameraReq, IntrinsicsDto, PoseDto};
 use crate::server::limits::{
     ImageError, ImageLimits, Measure, PNG_HEADER_BYTES, decode_png, png_size,
 };
 use crate::server::problem::Problem;
+use crate::server::request::{IntrinsicsDto, PoseDto};
 use crate::solve::align::{AlignOptions, align_to_image};
 use crate::solve::image::Luma;
 use crate::solve::{
@@ -549,10 +550,10 @@ pub(super) async fn camera_solution(
     if let Some(name) = &req.store_as {
         let put = Edit::PutCamera {
             name: name.clone(),
-            camera: CameraReq {
-                pose: Some(camera.pose.into()),
+            camera: CameraSpec {
+                pose: Some(camera.pose),
                 look_at: None,
-                intrinsics: Some(dto),
+                intrinsics: Some(camera.intrinsics),
                 baumgart: None,
             },
         };

@@ -12,11 +12,11 @@ use super::{Answer, HeavyReads, read_answer, snapshot, world_size, write};
 use crate::edit::Edit;
 use crate::model::{BodyId, Serial, World};
 use crate::server::actor::Handle;
-use crate::server::dto::{
-    BodyDto, CameraDto, CameraReq, CopyReq, CreateBody, EdgeDto, EulerOp, FaceDto, HexColor,
-    LightDto, PatchBody, SweepReq, TopologyDto, TransformReq, VertexDto, euler_of,
-};
+use crate::server::dto::{BodyDto, CameraDto, EdgeDto, FaceDto, TopologyDto, VertexDto, euler_of};
 use crate::server::problem::Problem;
+use crate::server::request::{
+    CameraReq, CopyReq, CreateBody, EulerOp, HexColor, LightDto, PatchBody, SweepReq, TransformReq,
+};
 
 pub(super) async fn world(State(h): State<Handle>) -> Answer {
     let w = snapshot(&h).await?;
@@ -193,7 +193,7 @@ fn topology_dto(w: &World, b: BodyId) -> TopologyDto {
 }
 
 pub(super) async fn create_body(State(h): State<Handle>, req: WriteJson<CreateBody>) -> Answer {
-    let edit = Edit::CreateBody(req.value);
+    let edit = Edit::CreateBody(req.value.into());
     write(&h, edit, req.expected, StatusCode::CREATED).await
 }
 
@@ -202,7 +202,7 @@ pub(super) async fn patch_body(
     ApiPath(body): ApiPath<u64>,
     req: WriteJson<PatchBody>,
 ) -> Answer {
-    let (patch, expected) = (req.value, req.expected);
+    let (patch, expected) = (req.value.into(), req.expected);
     write(
         &h,
         Edit::PatchBody { body, patch },
@@ -226,7 +226,7 @@ pub(super) async fn euler(
     ApiPath(body): ApiPath<u64>,
     req: WriteJson<EulerOp>,
 ) -> Answer {
-    let (op, expected) = (req.value, req.expected);
+    let (op, expected) = (req.value.into(), req.expected);
     write(&h, Edit::Euler { body, op }, expected, StatusCode::OK).await
 }
 
@@ -235,8 +235,14 @@ pub(super) async fn transform(
     ApiPath(body): ApiPath<u64>,
     req: WriteJson<TransformReq>,
 ) -> Answer {
-    let (req, expected) = (req.value, req.expected);
-    write(&h, Edit::Transform { body, req }, expected, StatusCode::OK).await
+    let (motion, expected) = (req.value.into(), req.expected);
+    write(
+        &h,
+        Edit::Transform { body, motion },
+        expected,
+        StatusCode::OK,
+    )
+    .await
 }
 
 pub(super) async fn sweep(
@@ -244,8 +250,8 @@ pub(super) async fn sweep(
     ApiPath(body): ApiPath<u64>,
     req: WriteJson<SweepReq>,
 ) -> Answer {
-    let (req, expected) = (req.value, req.expected);
-    write(&h, Edit::Sweep { body, req }, expected, StatusCode::OK).await
+    let (sweep, expected) = (req.value.into(), req.expected);
+    write(&h, Edit::Sweep { body, sweep }, expected, StatusCode::OK).await
 }
 
 pub(super) async fn dual(
@@ -299,7 +305,7 @@ pub(super) async fn put_camera(
     ApiPath(name): ApiPath<String>,
     req: WriteJson<CameraReq>,
 ) -> Answer {
-    let camera = req.value;
+    let camera = req.value.into();
     write(
         &h,
         Edit::PutCamera { name, camera },
@@ -349,7 +355,7 @@ pub(super) async fn put_light(
     ApiPath(name): ApiPath<String>,
     req: WriteJson<LightDto>,
 ) -> Answer {
-    let light = req.value;
+    let light = req.value.into();
     write(
         &h,
         Edit::PutLight { name, light },

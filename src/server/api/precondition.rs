@@ -238,7 +238,7 @@ fn body_problem(r: axum::extract::rejection::BytesRejection) -> Problem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::server::dto::{EulerOp, PatchBody, TransformReq};
+    use crate::server::request::{EulerOp, PatchBody, TransformReq};
 
     #[test]
     fn the_revision_field_is_taken_out_wherever_it_is() {

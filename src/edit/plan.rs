@@ -1,0 +1,201 @@
+//! Planning an edit: the part of its work that needs no world (building a shape and
+//! checking it, reading a camera or a light), done before the world's owner takes the
+//! edit. A plan is made anywhere, on any thread; only [`Planned::apply`] touches the
+//! world. So a body of a million faces is built beside the owner, which then only gives
+//! it serials and inserts it, while other writes go on.
+//!
+//! Applying a plan gives exactly what [`apply`](super::apply()) gives for the same edit
+//! on the same world, ids included: a body is built with serials numbered from 1 and
+//! takes its place in the world's serials when inserted (see [`Built`]).
+
+use super::apply::{Edit, EditError, Outcome, apply_prepared, build_checked, shape_faces};
+use crate::model::{Built, Camera, Light, World};
+
+/// Faces from which a new body is worth building away from the world's owner: below
+/// this the hand-over costs more than the build (a box, a 32-sided cylinder).
+pub const HEAVY_FACES: usize = 4_096;
+
+/// The world-free work of one edit, done.
+#[derive(Debug)]
+pub(super) enum Prepared {
+    /// Nothing to do before the world is at hand.
+    Nothing,
+    /// The new body, built and checked (boxed: the other plans are small).
+    Body(Box<Built>),
+    /// The camera described, checked.
+    Camera(Camera),
+    /// The light described, checked.
+    Light(Light),
+}
+
+/// Does the world-free work of `edit`. Refused as [`apply`](super::apply()) would refuse
+/// it for a reason that does not depend on the world.
+pub(super) fn prepare(edit: &Edit) -> Result<Prepared, EditError> {
+    Ok(match edit {
+        Edit::CreateBody(req) => Prepared::Body(Box::new(build_checked(req)?)),
+        Edit::PutCamera { camera, .. } => Prepared::Camera(camera.to_camera()?),
+        Edit::PutLight { light, .. } => Prepared::Light(light.to_light()?),
+        _ => Prepared::Nothing,
+    })
+}
+
+/// An edit whose world-free work is done, ready for the world's owner.
+#[derive(Debug)]
+pub struct Planned {
+    edit: Box<Edit>,
+    prepared: Prepared,
+}
+
+/// Plans `edit`: does the work that needs no world. Refused with the error
+/// [`apply`](super::apply()) would give for it on any world (a shape that is not a
+/// solid, too many faces, a camera or a light that is not one); what depends on the
+/// world (ids, names, the parts tree, ranges of placed bodies) is checked when the plan
+/// is applied.
+pub fn plan(edit: Box<Edit>) -> Result<Planned, EditError> {
+    let prepared = prepare(&edit)?;
+    Ok(Planned { edit, prepared })
+}
+
+impl Planned {
+    /// The edit planned.
+    pub fn edit(&self) -> &Edit {
+        &self.edit
+    }
+
+    /// Applies the plan to `world`, giving back the edit (for the journal) with the
+    /// outcome. On refusal the world is unchanged.
+    pub fn apply(self, world: &mut World) -> (Box<Edit>, Result<Outcome, EditError>) {
+        let outcome = apply_prepared(world, &self.edit, self.prepared);
+        (self.edit, outcome)
+    }
+}
+
+impl Edit {
+    /// Whether planning this edit is worth a thread of its own: it builds a body of at
+    /// least [`HEAVY_FACES`] faces.
+    pub fn is_heavy(&self) -> bool {
+        match self {
+            Edit::CreateBody(req) => shape_faces(&req.shape) >= HEAVY_FACES,
+            _ => false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::edit::apply;
+    use crate::edit::command::{CreateBody, Shape};
+    use crate::model::Pose;
+    use crate::model::check_topology;
+    use glam::{DQuat, DVec3};
+
+    fn create(name: &str, shape: Shape) -> Edit {
+        Edit::CreateBody(CreateBody {
+            name: Some(name.into()),
+            parent: None,
+            pose: Some(Pose {
+                position: DVec3::new(1.0, 2.0, 3.0),
+                rotation: DQuat::IDENTITY,
+            }),
+            color: None,
+            shape,
+        })
+    }
+
+    fn sphere(segments: u32, rings: u32) -> Shape {
+        Shape::Sphere {
+            radius: 2.0,
+            segments,
+            rings,
+        }
+    }
+
+    /// A world with a few bodies and some serials spent, so that a new body's serials do
+    /// not start at 1.
+    fn busy_world() -> World {
+        let mut w = World::new();
+        apply(&mut w, &create("a", Shape::Box { size: DVec3::ONE })).expect("a box");
+        apply(&mut w, &create("b", sphere(8, 4))).expect("a sphere");
+        w
+    }
+
+    #[test]
+    fn a_planned_body_gets_the_ids_a_build_inside_the_world_gives() {
+        for (i, shape) in [
+            sphere(64, 32),
+            Shape::Box {
+                size: DVec3::new(1.0, 2.0, 3.0),
+            },
+            Shape::Seminal {
+                position: DVec3::new(0.5, 0.0, 0.0),
+            },
+            Shape::Torus {
+                major_radius: 3.0,
+                minor_radius: 1.0,
+                segments: 24,
+                rings: 12,
+            },
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let edit = create(&format!("new{i}"), shape);
+            let mut inside = busy_world();
+            let direct = apply(&mut inside, &edit).expect("applied inside");
+            let mut beside = busy_world();
+            let planned = plan(Box::new(edit.clone())).expect("planned");
+            let (back, outcome) = planned.apply(&mut beside);
+            assert_eq!(*back, edit, "the plan gives its edit back");
+            assert_eq!(outcome.expect("applied from the plan"), direct);
+            assert_eq!(
+                serde_json::to_value(&beside).expect("serializes"),
+                serde_json::to_value(&inside).expect("serializes"),
+                "the same world, serials and all"
+            );
+            for (_, node) in beside.bodies() {
+                let report = check_topology(&node.body);
+                assert!(report.is_ok(), "{report:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_plan_refused_by_the_world_changes_nothing() {
+        let mut w = busy_world();
+        let before = serde_json::to_value(&w).expect("serializes");
+        // The name is taken: only the world can tell.
+        let planned = plan(Box::new(create("a", sphere(64, 32)))).expect("planned");
+        let (_, outcome) = planned.apply(&mut w);
+        assert!(outcome.is_err(), "a taken name is refused");
+        assert_eq!(serde_json::to_value(&w).expect("serializes"), before);
+        // The next body takes the serials a refused plan did not.
+        let mut fresh = busy_world();
+        let made = apply(&mut w, &create("c", sphere(6, 3))).expect("made");
+        let also = apply(&mut fresh, &create("c", sphere(6, 3))).expect("made");
+        assert_eq!(made, also);
+    }
+
+    #[test]
+    fn what_needs_no_world_is_refused_by_the_plan() {
+        let too_big = create("big", sphere(4_000, 1_000));
+        assert!(matches!(
+            plan(Box::new(too_big)),
+            Err(EditError::TooLarge { .. })
+        ));
+        let flat = create(
+            "flat",
+            Shape::Box {
+                size: DVec3::new(1.0, 0.0, 1.0),
+            },
+        );
+        assert!(plan(Box::new(flat)).is_err());
+    }
+
+    #[test]
+    fn only_large_bodies_are_heavy() {
+        assert!(create("s", sphere(128, 64)).is_heavy());
+        assert!(!create("s", sphere(32, 16)).is_heavy());
+        assert!(!Edit::Dual { body: 1 }.is_heavy());
+    }
+}

@@ -1,0 +1,258 @@
+//! Requests into commands: each write request's JSON body becomes the edit language's
+//! command it asks for. Defaults were filled when the request was read; nothing is
+//! checked here (the command is checked when it is planned and applied).
+
+use glam::{DVec2, DVec3};
+
+use super::{
+    CameraReq, CreateBody, EulerOp, FrameDto, LightDto, PatchBody, PoseDto, Shape, SweepKind,
+    SweepReq, TransformOp, TransformReq,
+};
+use crate::edit::command::{self, CameraSpec, LightSpec, LookAt, Motion, Move, Raster, Sweep};
+use crate::model::{Frame, Intrinsics, Pose};
+
+fn v3(v: [f64; 3]) -> DVec3 {
+    DVec3::from_array(v)
+}
+
+impl From<PoseDto> for Pose {
+    fn from(p: PoseDto) -> Self {
+        p.to_pose()
+    }
+}
+
+impl From<Shape> for command::Shape {
+    fn from(shape: Shape) -> Self {
+        let points = |p: Vec<[f64; 2]>| p.into_iter().map(DVec2::from_array).collect();
+        match shape {
+            Shape::Box { size } => command::Shape::Box { size: v3(size) },
+            Shape::Tetrahedron { radius } => command::Shape::Tetrahedron { radius },
+            Shape::Prism { polygon, height } => command::Shape::Prism {
+                polygon: points(polygon),
+                height,
+            },
+            Shape::Pyramid { polygon, height } => command::Shape::Pyramid {
+                polygon: points(polygon),
+                height,
+            },
+            Shape::Cylinder {
+                radius,
+                height,
+                segments,
+            } => command::Shape::Cylinder {
+                radius,
+                height,
+                segments,
+            },
+            Shape::Cone {
+                radius,
+                height,
+                segments,
+            } => command::Shape::Cone {
+                radius,
+                height,
+                segments,
+            },
+            Shape::Sphere {
+                radius,
+                segments,
+                rings,
+            } => command::Shape::Sphere {
+                radius,
+                segments,
+                rings,
+            },
+            Shape::Torus {
+                major_radius,
+                minor_radius,
+                segments,
+                rings,
+            } => command::Shape::Torus {
+                major_radius,
+                minor_radius,
+                segments,
+                rings,
+            },
+            Shape::Polyhedron { vertices, faces } => command::Shape::Polyhedron {
+                vertices: vertices.into_iter().map(v3).collect(),
+                faces,
+            },
+            Shape::Seminal { position } => command::Shape::Seminal {
+                position: v3(position),
+            },
+        }
+    }
+}
+
+impl From<CreateBody> for command::CreateBody {
+    fn from(req: CreateBody) -> Self {
+        command::CreateBody {
+            name: req.name,
+            parent: req.parent,
+            pose: req.pose.map(Pose::from),
+            color: req.color.map(|c| c.0),
+            shape: req.shape.into(),
+        }
+    }
+}
+
+impl From<PatchBody> for command::PatchBody {
+    fn from(req: PatchBody) -> Self {
+        command::PatchBody {
+            name: req.name,
+            parent: req.parent,
+            pose: req.pose.map(Pose::from),
+            color: req.color.map(|c| c.map(|c| c.0)),
+        }
+    }
+}
+
+impl From<EulerOp> for command::EulerOp {
+    fn from(op: EulerOp) -> Self {
+        use command::EulerOp as C;
+        match op {
+            EulerOp::Mkev {
+                face,
+                vertex,
+                position,
+            } => C::Mkev {
+                face,
+                vertex,
+                position: position.map(v3),
+            },
+            EulerOp::Mkfe { v1, face, v2 } => C::Mkfe { v1, face, v2 },
+            EulerOp::Esplit { edge, position } => C::Esplit {
+                edge,
+                position: position.map(v3),
+            },
+            EulerOp::Klfe { edge } => C::Klfe { edge },
+            EulerOp::Klev { vertex } => C::Klev { vertex },
+            EulerOp::Klve { edge } => C::Klve { edge },
+            EulerOp::Invert { edge } => C::Invert { edge },
+            EulerOp::Glue {
+                face1,
+                face2,
+                vertex1,
+                vertex2,
+            } => C::Glue {
+                face1,
+                face2,
+                vertex1,
+                vertex2,
+            },
+            EulerOp::Gluee {
+                face1,
+                vertex1,
+                face2,
+                vertex2,
+            } => C::Gluee {
+                face1,
+                vertex1,
+                face2,
+                vertex2,
+            },
+            EulerOp::Glueff { face1, face2 } => C::Glueff { face1, face2 },
+            EulerOp::Unglue { edges } => C::Unglue { edges },
+        }
+    }
+}
+
+impl From<TransformReq> for Move {
+    fn from(req: TransformReq) -> Self {
+        let motion = match req.op {
+            TransformOp::Translate { vector } => Motion::Translate { vector: v3(vector) },
+            TransformOp::Rotate {
+                axis,
+                angle_deg,
+                center,
+            } => Motion::Rotate {
+                axis: v3(axis),
+                angle_deg,
+                center: v3(center),
+            },
+            TransformOp::Dilate { factor, center } => Motion::Dilate {
+                factor,
+                center: v3(center),
+            },
+            TransformOp::Reflect { normal, point } => Motion::Reflect {
+                normal: v3(normal),
+                point: v3(point),
+            },
+        };
+        Move {
+            motion,
+            frame: match req.frame {
+                FrameDto::World => Frame::World,
+                FrameDto::Body => Frame::Body,
+            },
+            target: req.target,
+        }
+    }
+}
+
+impl From<SweepReq> for Sweep {
+    fn from(req: SweepReq) -> Self {
+        Sweep {
+            face: req.face,
+            kind: match req.kind {
+                SweepKind::Prism => command::SweepKind::Prism,
+                SweepKind::Pyramid => command::SweepKind::Pyramid,
+                SweepKind::CwPrismoid => command::SweepKind::CwPrismoid,
+                SweepKind::CcwPrismoid => command::SweepKind::CcwPrismoid,
+            },
+            distance: req.distance,
+            offset: req.offset.map(v3),
+            peak: req.peak.map(v3),
+            scale: req.scale,
+        }
+    }
+}
+
+impl From<CameraReq> for CameraSpec {
+    fn from(req: CameraReq) -> Self {
+        CameraSpec {
+            pose: req.pose.map(Pose::from),
+            look_at: req.look_at.map(|l| LookAt {
+                eye: v3(l.eye),
+                target: v3(l.target),
+                up: v3(l.up),
+            }),
+            intrinsics: req.intrinsics.map(|i| Intrinsics {
+                width: i.width,
+                height: i.height,
+                fx: i.fx,
+                fy: i.fy,
+                cx: i.cx,
+                cy: i.cy,
+            }),
+            baumgart: req.baumgart.map(|b| Raster {
+                focal: b.focal,
+                ldx: b.ldx,
+                ldy: b.ldy,
+                pdx: b.pdx,
+                pdy: b.pdy,
+            }),
+        }
+    }
+}
+
+impl From<LightDto> for LightSpec {
+    fn from(req: LightDto) -> Self {
+        match req {
+            LightDto::Sun {
+                direction,
+                intensity,
+            } => LightSpec::Sun {
+                direction: v3(direction),
+                intensity,
+            },
+            LightDto::Point {
+                position,
+                intensity,
+            } => LightSpec::Point {
+                position: v3(position),
+                intensity,
+            },
+        }
+    }
+}
