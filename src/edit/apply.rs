@@ -387,7 +387,7 @@ fn counts(outcome: &mut Outcome, b: &Body) {
 /// Applies `edit` to `world`: plans it ([`plan`](super::plan)) and applies the plan at
 /// once. On refusal the world is unchanged.
 pub fn apply(world: &mut World, edit: &Edit) -> Result<Outcome, EditError> {
-    let prepared = prepare(edit)?;
+    let prepared = prepare(edit, world.next_serial())?;
     apply_prepared(world, edit, prepared)
 }
 
@@ -402,7 +402,7 @@ pub(super) fn apply_prepared(
         Edit::CreateBody(req) => {
             let built = match prepared {
                 Prepared::Body(built) => *built,
-                _ => build_checked(req)?,
+                _ => build_checked(req, world.next_serial())?,
             };
             create(world, req, built)
         }
@@ -504,10 +504,11 @@ pub(super) fn apply_prepared(
     }
 }
 
-/// The body `req` asks for, built and checked apart from any world (see [`Built`]).
-pub(super) fn build_checked(req: &CreateBody) -> Result<Built, EditError> {
+/// The body `req` asks for, built and checked apart from any world (see [`Built`]),
+/// numbered for a world whose next serial is `next`.
+pub(super) fn build_checked(req: &CreateBody, next: Serial) -> Result<Built, EditError> {
     check_faces(shape_faces(&req.shape))?;
-    Built::new(|s| build(&req.shape, s))
+    Built::expecting(next, |s| build(&req.shape, s))
 }
 
 fn create(world: &mut World, req: &CreateBody, built: Built) -> Result<Outcome, EditError> {

@@ -13,4 +13,4 @@ pub mod command;
 pub mod plan;
 
 pub use apply::{Edit, EditError, MAX_BODY_FACES, Outcome, apply};
-pub use plan::{HEAVY_FACES, Planned, plan};
+pub use plan::{HEAVY_FACES, Planned, plan, plan_expecting};

@@ -9,7 +9,7 @@
 //! takes its place in the world's serials when inserted (see [`Built`]).
 
 use super::apply::{Edit, EditError, Outcome, apply_prepared, build_checked, shape_faces};
-use crate::model::{Built, Camera, Light, World};
+use crate::model::{Built, Camera, Light, Serial, World};
 
 /// Faces from which a new body is worth building away from the world's owner: below
 /// this the hand-over costs more than the build (a box, a 32-sided cylinder).
@@ -28,11 +28,12 @@ pub(super) enum Prepared {
     Light(Light),
 }
 
-/// Does the world-free work of `edit`. Refused as [`apply`](super::apply()) would refuse
-/// it for a reason that does not depend on the world.
-pub(super) fn prepare(edit: &Edit) -> Result<Prepared, EditError> {
+/// Does the world-free work of `edit`, numbering a new body for a world whose next
+/// serial is `next`. Refused as [`apply`](super::apply()) would refuse it for a reason
+/// that does not depend on the world.
+pub(super) fn prepare(edit: &Edit, next: Serial) -> Result<Prepared, EditError> {
     Ok(match edit {
-        Edit::CreateBody(req) => Prepared::Body(Box::new(build_checked(req)?)),
+        Edit::CreateBody(req) => Prepared::Body(Box::new(build_checked(req, next)?)),
         Edit::PutCamera { camera, .. } => Prepared::Camera(camera.to_camera()?),
         Edit::PutLight { light, .. } => Prepared::Light(light.to_light()?),
         _ => Prepared::Nothing,
@@ -52,7 +53,14 @@ pub struct Planned {
 /// world (ids, names, the parts tree, ranges of placed bodies) is checked when the plan
 /// is applied.
 pub fn plan(edit: Box<Edit>) -> Result<Planned, EditError> {
-    let prepared = prepare(&edit)?;
+    plan_expecting(edit, Serial(1))
+}
+
+/// [`plan`], numbering a new body for a world whose next serial is `next` (the one a
+/// recent snapshot shows, say): if the world is still there when the plan is applied,
+/// the body goes in without a pass over its serials. Any `next` gives the same result.
+pub fn plan_expecting(edit: Box<Edit>, next: Serial) -> Result<Planned, EditError> {
+    let prepared = prepare(&edit, next)?;
     Ok(Planned { edit, prepared })
 }
 

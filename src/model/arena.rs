@@ -186,20 +186,22 @@ impl<T> Arena<T> {
         self.index_slots = pairs.iter().map(|p| p.1).collect();
     }
 
-    /// Adds `delta` to every serial this arena holds, in its slots and its index alike;
-    /// dead slots stay dead. The index stays sorted, every entry moving by the same
-    /// amount, so this is one linear pass and no sort.
+    /// Adds `delta` (modulo 2^64, so a shift down is the two's complement of its size)
+    /// to every serial this arena holds, in its slots and its index alike; dead slots
+    /// stay dead. The index stays sorted, every entry moving by the same amount, so this
+    /// is one linear pass and no sort.
     ///
-    /// Precondition: no serial plus `delta` overflows. Postcondition: the entity that
-    /// carried serial `s` carries `s + delta`, in the same slot.
+    /// Precondition: every shifted serial is neither 0 nor wrapped past 2^64.
+    /// Postcondition: the entity that carried serial `s` carries `s + delta`, in the same
+    /// slot. Inverse: a shift by `delta.wrapping_neg()`.
     pub(crate) fn shift_serials(&mut self, delta: u64) {
         for s in &mut self.serials {
             if *s != Serial::NONE {
-                s.0 += delta;
+                s.0 = s.0.wrapping_add(delta);
             }
         }
         for s in &mut self.index_serials {
-            s.0 += delta;
+            s.0 = s.0.wrapping_add(delta);
         }
     }
 

@@ -22,6 +22,7 @@
 //! When the queue is full, writes are refused at once with [`WriteError::Busy`] (the HTTP
 //! layer answers 503 with `Retry-After`) rather than queued without bound.
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -29,8 +30,8 @@ use tokio::sync::{Semaphore, mpsc, oneshot};
 
 use super::changes::{self, Change};
 use super::events::Feed;
-use crate::edit::{Edit, EditError, Outcome, Planned, plan};
-use crate::model::World;
+use crate::edit::{Edit, EditError, Outcome, Planned, plan, plan_expecting};
+use crate::model::{Serial, World};
 
 /// How many requests may wait for the owner by default.
 pub const QUEUE: usize = 1024;
@@ -217,6 +218,9 @@ pub struct Handle {
     tx: mpsc::Sender<Command>,
     /// Turns for planning large edits on blocking threads: one per core.
     planners: Arc<Semaphore>,
+    /// The world's next serial after the last write applied, for plans to number their
+    /// bodies by.
+    next_serial: Arc<AtomicU64>,
     latest: Latest,
     observer: Arc<dyn Observer>,
     failure: Failure,
@@ -279,10 +283,11 @@ impl Handle {
             .await
             .map_err(|_| WriteError::Stopped)?;
         let counted = Planning::start(self.observer.clone());
+        let next = Serial(self.next_serial.load(Ordering::Relaxed));
         let built = tokio::task::spawn_blocking(move || {
             let _turn = turn;
             let _counted = counted;
-            plan(edit)
+            plan_expecting(edit, next)
         })
         .await;
         match built {
@@ -376,7 +381,9 @@ pub fn spawn<J: Journal>(
     let (tx, rx) = mpsc::channel(config.queue.max(1));
     let latest: Latest = Arc::new(Mutex::new(None));
     let failure: Failure = Arc::new(Mutex::new(None));
+    let next_serial = Arc::new(AtomicU64::new(world.next_serial().get()));
     let owner = Owner {
+        next_serial: next_serial.clone(),
         world,
         journal,
         feed,
@@ -392,6 +399,7 @@ pub fn spawn<J: Journal>(
     let handle = Handle {
         tx,
         planners: Arc::new(Semaphore::new(cores)),
+        next_serial,
         latest,
         observer,
         failure,
@@ -415,6 +423,8 @@ pub fn spawn_in_memory(world: World) -> Handle {
 
 struct Owner<J> {
     world: World,
+    /// Where handles read the world's next serial.
+    next_serial: Arc<AtomicU64>,
     journal: J,
     feed: Arc<Feed>,
     observer: Arc<dyn Observer>,
@@ -532,6 +542,8 @@ impl<J: Journal> Owner<J> {
         }
         let before = changes::before(&self.world, planned.edit());
         let (edit, outcome) = planned.apply(&mut self.world);
+        self.next_serial
+            .store(self.world.next_serial().get(), Ordering::Relaxed);
         match outcome {
             Ok(outcome) if self.world.revision() == actual => Some(Step::Unchanged(reply, outcome)),
             Ok(outcome) => {
@@ -593,6 +605,8 @@ impl<J: Journal> Owner<J> {
                     Ok(world) => {
                         tracing::warn!(revision = world.revision(), "world reloaded from storage");
                         self.feed.reset_revision(world.revision());
+                        self.next_serial
+                            .store(world.next_serial().get(), Ordering::Relaxed);
                         self.world = world;
                     }
                     Err(e) => {

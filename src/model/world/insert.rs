@@ -108,8 +108,9 @@ impl World {
     /// have built and inserted it here: the body's own serial is taken first, then its
     /// faces, edges and vertices take the next serials in the order they were numbered
     /// apart. So the same build gives the same ids whether it ran inside the world's
-    /// owner or beside it. Costs one pass over the body's serials; nothing is rebuilt or
-    /// checked again but the placement.
+    /// owner or beside it. Costs nothing in the size of the body when the world's next
+    /// serial is the one the build expected, else one pass over its serials; nothing is
+    /// rebuilt or checked again but the placement.
     ///
     /// Refused, taking no serials, when `supart` is unknown, the name is bad or taken, or
     /// the pose is not finite or would place the body beyond the world's range.
@@ -124,10 +125,20 @@ impl World {
     ) -> Result<BodyId, WorldError> {
         let (name, pose) = self.check_insert(name, supart, pose)?;
         let id = BodyId(self.serials.take());
-        let Built { mut body, taken } = built;
-        body.shift_serials(id.get());
-        if taken > 0 {
-            self.serials.skip_past(Serial(id.get() + taken));
+        let Built {
+            mut body,
+            first,
+            end,
+        } = built;
+        // Serials only grow, but a world reloaded after a failed commit may be behind
+        // the one expected: the shift is taken modulo 2^64 either way.
+        let shift = self.serials.peek().0.wrapping_sub(first);
+        if shift != 0 {
+            body.shift_serials(shift);
+        }
+        let end = end.wrapping_add(shift);
+        if end > self.serials.peek().0 {
+            self.serials.skip_past(Serial(end - 1));
         }
         self.tree.add(id, name, supart, pose, Arc::new(body));
         self.tree.get_mut(id).expect("just added").color = color;
@@ -193,29 +204,51 @@ impl World {
     }
 }
 
-/// A body built apart from any world and checked, its serials numbered from 1: the part
-/// of an insertion whose cost grows with the body, done before the world is touched so
-/// that it can run beside the world's owner. [`World::insert_built`] places it.
+/// A body built apart from any world and checked: the part of an insertion whose cost
+/// grows with the body, done before the world is touched so that it can run beside the
+/// world's owner. [`World::insert_built`] places it.
+///
+/// Its serials are numbered as if the world's next serial were the one expected when it
+/// was built ([`Built::expecting`]; 1 with [`Built::new`]). Inserted into a world whose
+/// next serial is that one, it goes in as it is; otherwise its serials are shifted into
+/// place, one pass over them.
 #[derive(Debug, Clone)]
 pub struct Built {
     body: Body,
-    /// Serials the build took (the body's entities carry serials in `1..=taken`).
-    taken: u64,
+    /// The first serial the build took (the one after the body's own).
+    first: u64,
+    /// The serial the build would have taken next: the body's lie in `first..end`.
+    end: u64,
 }
 
 impl Built {
-    /// Builds a body with a counter of its own and checks it as [`World::insert`]
-    /// would: topology ([`check_topology`]) and loci (finite, within the world's range).
-    /// Serials the builder did not take from the counter it was given are renumbered
-    /// after the ones it took, in the order of their old values.
-    ///
-    /// Refused with `build`'s own error, or when the body fails those checks (a
-    /// [`WorldError`] converted into `build`'s error type).
+    /// [`Built::expecting`] a world whose next serial is 1 (the body's own: its faces,
+    /// edges and vertices are numbered from 2).
     pub fn new<E>(build: impl FnOnce(&mut Serials) -> Result<Body, E>) -> Result<Built, E>
     where
         E: From<WorldError>,
     {
+        Built::expecting(Serial(1), build)
+    }
+
+    /// Builds a body with a counter of its own, as a world whose next serial is `next`
+    /// would (that serial for the body, the following ones for its faces, edges and
+    /// vertices), and checks it as [`World::insert`] would: topology
+    /// ([`check_topology`]) and loci (finite, within the world's range). Serials the
+    /// builder did not take from the counter it was given are renumbered after the ones
+    /// it took, in the order of their old values.
+    ///
+    /// Refused with `build`'s own error, or when the body fails those checks (a
+    /// [`WorldError`] converted into `build`'s error type).
+    pub fn expecting<E>(
+        next: Serial,
+        build: impl FnOnce(&mut Serials) -> Result<Body, E>,
+    ) -> Result<Built, E>
+    where
+        E: From<WorldError>,
+    {
         let mut serials = Serials::new();
+        serials.skip_past(next);
         let from = serials.peek();
         let body = build(&mut serials)?;
         check_geometry_input(&body)?;
@@ -225,12 +258,13 @@ impl Built {
             renumber(&body, &mut serials)
         };
         Ok(Built {
-            taken: serials.peek().0 - from.0,
             body,
+            first: from.0,
+            end: serials.peek().0,
         })
     }
 
-    /// The body, numbered from 1.
+    /// The body, numbered as built.
     pub fn body(&self) -> &Body {
         &self.body
     }
@@ -261,7 +295,7 @@ mod tests {
 
         let built =
             Built::new(|s| sphere(s, 1.0, 12, 6).map_err(WorldError::from)).expect("built apart");
-        assert_eq!(serials(built.body()).iter().min(), Some(&1));
+        assert_eq!(serials(built.body()).iter().min(), Some(&2));
         let b = world
             .insert_built(built, Some("ball"), world.root(), Pose::IDENTITY, None)
             .expect("inserted");
@@ -274,6 +308,23 @@ mod tests {
             assert_eq!(placed.face_by_serial(s), Some(f), "found by its serial");
         }
         assert!(check_topology(placed).is_ok());
+
+        // Expecting the right next serial, or a wrong one, gives the same numbers.
+        for guess in [world.serials.peek().0, 1, world.serials.peek().0 + 1_000] {
+            let mut inside = world.clone();
+            let mut counter = inside.serials.clone();
+            counter.take();
+            let direct = sphere(&mut counter, 1.0, 12, 6).expect("a sphere");
+            let built = Built::expecting(Serial(guess), |s| {
+                sphere(s, 1.0, 12, 6).map_err(WorldError::from)
+            })
+            .expect("built apart");
+            let b = inside
+                .insert_built(built, None, inside.root(), Pose::IDENTITY, None)
+                .expect("inserted");
+            assert_eq!(serials(inside.body(b).expect("live")), serials(&direct));
+            assert_eq!(inside.serials.peek(), counter.peek(), "expecting {guess}");
+        }
     }
 
     #[test]
