@@ -35,4 +35,4 @@ pub use pose::{Pose, PoseError};
 pub use range::RangeError;
 pub use topology::{Around, EdgeUse, Link};
 pub use transform::{Frame, Moves, Transform, TransformError};
-pub use world::{Built, Killed, UngluedBodies, World, WorldError};
+pub use world::{Built, Killed, Named, Register, UngluedBodies, World, WorldError};

@@ -3,9 +3,105 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::{Body, Camera, geometry::Bounds};
+use crate::model::{Body, Camera, Light, geometry::Bounds};
 
-use super::request::{HexColor, IntrinsicsDto, PoseDto};
+use super::request::{HexColor, IntrinsicsDto, LightDto, PoseDto};
+
+/// `GET /v1/world`: the world's revision and size.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct WorldSummary {
+    /// The revision.
+    pub revision: u64,
+    /// Bodies, not counting the world itself.
+    pub bodies: usize,
+    /// Faces in all bodies.
+    pub faces: usize,
+    /// Edges in all bodies.
+    pub edges: usize,
+    /// Vertices in all bodies.
+    pub vertices: usize,
+    /// Cameras.
+    pub cameras: usize,
+    /// Lights.
+    pub lights: usize,
+}
+
+/// `GET /v1/bodies`: the bodies asked for, and the revision they were read at.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct BodyList {
+    /// The bodies, in id order.
+    pub bodies: Vec<BodyDto>,
+    /// The revision.
+    pub revision: u64,
+}
+
+/// `GET /v1/bodies/{id}`: a body and the revision it was read at.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct BodyAnswer {
+    /// The body.
+    #[serde(flatten)]
+    pub body: BodyDto,
+    /// The revision.
+    pub revision: u64,
+}
+
+/// `GET /v1/changes`: the changes after a revision, or word to read the world again.
+#[derive(Clone, Debug, Serialize)]
+pub struct ChangesPage {
+    /// The revision asked after.
+    pub since: u64,
+    /// The world's revision.
+    pub revision: u64,
+    /// Whether the history no longer reaches back to `since`: read the world whole.
+    pub resync: bool,
+    /// With `resync`: the oldest revision whose change is kept (`null` if none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub oldest: Option<Option<u64>>,
+    /// Whether more changes follow the last one given.
+    pub more: bool,
+    /// The changes, oldest first.
+    pub changes: Vec<std::sync::Arc<super::changes::Change>>,
+}
+
+/// `GET /healthz`.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Health {
+    /// Always `"ok"`.
+    pub status: &'static str,
+    /// The newest revision published.
+    pub revision: u64,
+}
+
+/// `GET /readyz`.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Ready {
+    /// Always `"ready"`.
+    pub status: &'static str,
+    /// The world's revision.
+    pub revision: u64,
+    /// Requests waiting for the world's owner.
+    pub queue: usize,
+}
+
+/// A light as answered: its name beside the light as `PUT /v1/lights/{name}` takes it.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct LightAnswer {
+    /// Its name.
+    pub name: String,
+    /// The light.
+    #[serde(flatten)]
+    pub light: LightDto,
+}
+
+impl LightAnswer {
+    /// The answer for light `l` named `name`.
+    pub fn new(name: &str, l: &Light) -> Self {
+        LightAnswer {
+            name: name.to_owned(),
+            light: LightDto::from(l),
+        }
+    }
+}
 
 /// A camera as answered.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]

@@ -53,6 +53,7 @@ mod read;
 mod tree;
 
 pub use insert::Built;
+pub use named::{Named, Register};
 
 /// Why a world operation was refused. The world is unchanged.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -204,8 +205,8 @@ pub struct UngluedBodies {
 pub struct World {
     tree: PartsTree,
     serials: Serials,
-    cameras: BTreeMap<String, Camera>,
-    lights: BTreeMap<String, Light>,
+    cameras: Register<Camera>,
+    lights: Register<Light>,
     revision: u64,
 }
 
@@ -224,8 +225,8 @@ impl World {
         World {
             tree: PartsTree::new(root),
             serials,
-            cameras: BTreeMap::new(),
-            lights: BTreeMap::new(),
+            cameras: Register::default(),
+            lights: Register::default(),
             revision: 0,
         }
     }

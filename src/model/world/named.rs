@@ -1,10 +1,98 @@
-//! Cameras and lights, by name.
+//! Cameras and lights, by name: one [`Register`] for each kind, the same rules for both.
 
 use crate::model::camera::{Camera, Light};
 
 use super::*;
 
+/// A thing the world keeps by name beside its bodies: a camera, a light.
+pub trait Named: Clone {
+    /// Checks the thing before it is stored: the copy to keep, or why it is refused.
+    fn validated(&self) -> Result<Self, WorldError>;
+    /// The refusal for a name under which nothing of this kind is kept.
+    fn unknown(name: &str) -> WorldError;
+}
+
+impl Named for Camera {
+    fn validated(&self) -> Result<Self, WorldError> {
+        Ok(Camera::validated(self)?)
+    }
+    fn unknown(name: &str) -> WorldError {
+        WorldError::UnknownCamera(name.to_owned())
+    }
+}
+
+impl Named for Light {
+    fn validated(&self) -> Result<Self, WorldError> {
+        Ok(Light::validated(self)?)
+    }
+    fn unknown(name: &str) -> WorldError {
+        WorldError::UnknownLight(name.to_owned())
+    }
+}
+
+/// Things of one kind by name, in name order. Serialized as a map from name to thing.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(
+    transparent,
+    bound(serialize = "T: Serialize", deserialize = "T: Deserialize<'de>")
+)]
+pub struct Register<T>(BTreeMap<String, T>);
+
+impl<T> Default for Register<T> {
+    fn default() -> Self {
+        Register(BTreeMap::new())
+    }
+}
+
+impl<T: Named> Register<T> {
+    /// The thing named `name`.
+    pub fn get(&self, name: &str) -> Option<&T> {
+        self.0.get(name)
+    }
+
+    /// Every thing, by name, in name order.
+    pub fn iter(&self) -> impl Iterator<Item = (&str, &T)> + '_ {
+        self.0.iter().map(|(k, v)| (k.as_str(), v))
+    }
+
+    /// How many there are.
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// Stores (or replaces) `thing` under `name`. Refused, changing nothing, for a bad
+    /// name or a thing that [`Named::validated`] refuses. Inverse: [`Register::remove`]
+    /// (or storing the thing replaced).
+    fn set(&mut self, name: &str, thing: &T) -> Result<(), WorldError> {
+        valid_name(name)?;
+        let thing = thing.validated()?;
+        self.0.insert(name.to_owned(), thing);
+        Ok(())
+    }
+
+    /// Removes the thing named `name` and returns it. Refused, changing nothing, if
+    /// there is none.
+    fn remove(&mut self, name: &str) -> Result<T, WorldError> {
+        self.0.remove(name).ok_or_else(|| T::unknown(name))
+    }
+}
+
 impl World {
+    /// The cameras, by name.
+    pub fn camera_register(&self) -> &Register<Camera> {
+        &self.cameras
+    }
+
+    /// The lights, by name.
+    pub fn light_register(&self) -> &Register<Light> {
+        &self.lights
+    }
+
     /// The camera with this name.
     pub fn camera(&self, name: &str) -> Option<&Camera> {
         self.cameras.get(name)
@@ -12,7 +100,7 @@ impl World {
 
     /// Every camera, by name.
     pub fn cameras(&self) -> impl Iterator<Item = (&str, &Camera)> + '_ {
-        self.cameras.iter().map(|(k, c)| (k.as_str(), c))
+        self.cameras.iter()
     }
 
     /// The light with this name.
@@ -22,43 +110,33 @@ impl World {
 
     /// Every light, by name.
     pub fn lights(&self) -> impl Iterator<Item = (&str, &Light)> + '_ {
-        self.lights.iter().map(|(k, l)| (k.as_str(), l))
+        self.lights.iter()
     }
 
     /// Stores (or replaces) the camera `name`. Refused for a bad name or camera.
     pub fn set_camera(&mut self, name: &str, camera: Camera) -> Result<(), WorldError> {
-        valid_name(name)?;
-        let camera = camera.validated()?;
-        self.cameras.insert(name.to_owned(), camera);
+        self.cameras.set(name, &camera)?;
         self.written();
         Ok(())
     }
 
     /// Removes the camera `name` and returns it. Refused if there is none.
     pub fn remove_camera(&mut self, name: &str) -> Result<Camera, WorldError> {
-        let c = self
-            .cameras
-            .remove(name)
-            .ok_or_else(|| WorldError::UnknownCamera(name.to_owned()))?;
+        let c = self.cameras.remove(name)?;
         self.written();
         Ok(c)
     }
 
     /// Stores (or replaces) the light `name`. Refused for a bad name or light.
     pub fn set_light(&mut self, name: &str, light: Light) -> Result<(), WorldError> {
-        valid_name(name)?;
-        let light = light.validated()?;
-        self.lights.insert(name.to_owned(), light);
+        self.lights.set(name, &light)?;
         self.written();
         Ok(())
     }
 
     /// Removes the light `name` and returns it. Refused if there is none.
     pub fn remove_light(&mut self, name: &str) -> Result<Light, WorldError> {
-        let l = self
-            .lights
-            .remove(name)
-            .ok_or_else(|| WorldError::UnknownLight(name.to_owned()))?;
+        let l = self.lights.remove(name)?;
         self.written();
         Ok(l)
     }

@@ -9,10 +9,10 @@ use axum::http::request::Parts;
 use axum::response::sse::{KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
-use serde_json::json;
 
 use super::extract::ApiQuery;
 use super::{Answer, read_answer};
+use crate::server::dto::ChangesPage;
 use crate::server::events::{Feed, Since};
 use crate::server::problem::Problem;
 
@@ -56,24 +56,25 @@ pub(super) async fn changes(State(feed): State<Arc<Feed>>, q: ChangesQuery) -> A
             revision,
         } => read_answer(
             revision,
-            json!({
-                "since": q.since,
-                "revision": revision,
-                "resync": false,
-                "more": more,
-                "changes": changes,
-            }),
+            ChangesPage {
+                since: q.since,
+                revision,
+                resync: false,
+                oldest: None,
+                more,
+                changes,
+            },
         ),
         Since::Resync { revision, oldest } => read_answer(
             revision,
-            json!({
-                "since": q.since,
-                "revision": revision,
-                "resync": true,
-                "oldest": oldest,
-                "more": false,
-                "changes": [],
-            }),
+            ChangesPage {
+                since: q.since,
+                revision,
+                resync: true,
+                oldest: Some(oldest),
+                more: false,
+                changes: Vec::new(),
+            },
         ),
     })
 }

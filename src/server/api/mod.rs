@@ -10,6 +10,7 @@ pub mod camera_solution;
 pub mod extract;
 mod feed;
 mod model;
+mod named;
 mod ops;
 pub mod precondition;
 pub mod spatial;
@@ -33,6 +34,7 @@ use super::metrics::Metrics;
 use super::problem::Problem;
 use crate::edit::{Edit, Outcome};
 use crate::model::World;
+use crate::model::camera::{Camera, Light};
 use precondition::etag;
 
 /// The largest request body accepted by default, in bytes (a polyhedron upload is the
@@ -112,7 +114,7 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         .route("/v1/bodies/{id}/dual", writes(post(dual)))
         .route("/v1/bodies/{id}/evert", writes(post(evert)))
         .route("/v1/bodies/{id}/copy", writes(post(copy)))
-        .route("/v1/cameras", reads(get(list_cameras)))
+        .route("/v1/cameras", reads(get(named::list::<Camera>)))
         .route(
             "/v1/cameras/{name}/image",
             reads(get(appearance::camera_image)),
@@ -124,8 +126,9 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         )
         .route(
             "/v1/cameras/{name}",
-            reads(get(get_camera))
-                .merge(writes(axum::routing::put(put_camera).delete(delete_camera))),
+            reads(get(named::get_one::<Camera>)).merge(writes(
+                axum::routing::put(named::put::<Camera>).delete(named::delete::<Camera>),
+            )),
         )
         .route(
             "/v1/spatial/sphere",
@@ -143,10 +146,12 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
             "/v1/spatial/ray",
             reads(get(spatial::ray_get).post(spatial::ray_post)),
         )
-        .route("/v1/lights", reads(get(list_lights)))
+        .route("/v1/lights", reads(get(named::list::<Light>)))
         .route(
             "/v1/lights/{name}",
-            reads(get(get_light)).merge(writes(axum::routing::put(put_light).delete(delete_light))),
+            reads(get(named::get_one::<Light>)).merge(writes(
+                axum::routing::put(named::put::<Light>).delete(named::delete::<Light>),
+            )),
         )
         .fallback(not_found)
         .layer(axum::extract::Extension(HeavyReads::for_this_machine()))

@@ -4,7 +4,6 @@ use axum::extract::{Extension, State};
 use axum::http::StatusCode;
 use axum::response::IntoResponse;
 use serde::Deserialize;
-use serde_json::json;
 
 use super::extract::{ApiJson, ApiPath, ApiQuery};
 use super::precondition::{IfMatch, Unused, WriteJson};
@@ -12,10 +11,12 @@ use super::{Answer, HeavyReads, read_answer, snapshot, world_size, write};
 use crate::edit::Edit;
 use crate::model::{BodyId, Serial, World};
 use crate::server::actor::Handle;
-use crate::server::dto::{BodyDto, CameraDto, EdgeDto, FaceDto, TopologyDto, VertexDto, euler_of};
+use crate::server::dto::{
+    BodyAnswer, BodyDto, BodyList, EdgeDto, FaceDto, TopologyDto, VertexDto, WorldSummary, euler_of,
+};
 use crate::server::problem::Problem;
 use crate::server::request::{
-    CameraReq, CopyReq, CreateBody, EulerOp, HexColor, LightDto, PatchBody, SweepReq, TransformReq,
+    CopyReq, CreateBody, EulerOp, HexColor, PatchBody, SweepReq, TransformReq,
 };
 
 pub(super) async fn world(State(h): State<Handle>) -> Answer {
@@ -23,15 +24,15 @@ pub(super) async fn world(State(h): State<Handle>) -> Answer {
     let (f, e, v) = world_size(&w);
     Ok(read_answer(
         w.revision(),
-        json!({
-        "revision": w.revision(),
-        "bodies": w.body_count(),
-        "faces": f,
-        "edges": e,
-        "vertices": v,
-        "cameras": w.cameras().count(),
-        "lights": w.lights().count(),
-        }),
+        WorldSummary {
+            revision: w.revision(),
+            bodies: w.body_count(),
+            faces: f,
+            edges: e,
+            vertices: v,
+            cameras: w.camera_register().len(),
+            lights: w.light_register().len(),
+        },
     ))
 }
 
@@ -87,19 +88,15 @@ pub(super) async fn list_bodies(
     })
     .await
     .map_err(Problem::internal)?;
-    Ok(read_answer(
-        revision,
-        json!({ "bodies": bodies, "revision": revision }),
-    ))
+    Ok(read_answer(revision, BodyList { bodies, revision }))
 }
 
 pub(super) async fn get_body(State(h): State<Handle>, ApiPath(id): ApiPath<u64>) -> Answer {
     let w = snapshot(&h).await?;
-    let dto = body_dto(&w, BodyId(Serial(id)))
+    let body = body_dto(&w, BodyId(Serial(id)))
         .ok_or_else(|| Problem::not_found(format!("no body has id {id}")))?;
-    let mut v = serde_json::to_value(dto).map_err(|e| Problem::bad_request(e.to_string()))?;
-    v["revision"] = json!(w.revision());
-    Ok(read_answer(w.revision(), v))
+    let revision = w.revision();
+    Ok(read_answer(revision, BodyAnswer { body, revision }))
 }
 
 pub(super) async fn topology(
@@ -281,95 +278,4 @@ pub(super) async fn copy(
     // The body is optional: none (no Content-Type) means an unnamed copy.
     let name = req.and_then(|ApiJson(r)| r.name);
     write(&h, Edit::Copy { body, name }, expected, StatusCode::CREATED).await
-}
-
-pub(super) async fn list_cameras(State(h): State<Handle>) -> Answer {
-    let w = snapshot(&h).await?;
-    let cams: Vec<CameraDto> = w.cameras().map(|(n, c)| CameraDto::new(n, c)).collect();
-    Ok(read_answer(
-        w.revision(),
-        json!({ "cameras": cams, "revision": w.revision() }),
-    ))
-}
-
-pub(super) async fn get_camera(State(h): State<Handle>, ApiPath(name): ApiPath<String>) -> Answer {
-    let w = snapshot(&h).await?;
-    let c = w
-        .camera(&name)
-        .ok_or_else(|| Problem::not_found(format!("no camera is named {:?}", name)))?;
-    Ok(read_answer(w.revision(), CameraDto::new(&name, c)))
-}
-
-pub(super) async fn put_camera(
-    State(h): State<Handle>,
-    ApiPath(name): ApiPath<String>,
-    req: WriteJson<CameraReq>,
-) -> Answer {
-    let camera = req.value.into();
-    write(
-        &h,
-        Edit::PutCamera { name, camera },
-        req.expected,
-        StatusCode::OK,
-    )
-    .await
-}
-
-pub(super) async fn delete_camera(
-    State(h): State<Handle>,
-    IfMatch(expected): IfMatch,
-    ApiPath(name): ApiPath<String>,
-    _unused: Unused,
-) -> Answer {
-    write(&h, Edit::DeleteCamera { name }, expected, StatusCode::OK).await
-}
-
-pub(super) async fn list_lights(State(h): State<Handle>) -> Answer {
-    let w = snapshot(&h).await?;
-    let lights: Vec<serde_json::Value> = w
-        .lights()
-        .map(|(n, l)| {
-            let mut v = serde_json::to_value(LightDto::from(l)).unwrap_or_default();
-            v["name"] = json!(n);
-            v
-        })
-        .collect();
-    Ok(read_answer(
-        w.revision(),
-        json!({ "lights": lights, "revision": w.revision() }),
-    ))
-}
-
-pub(super) async fn get_light(State(h): State<Handle>, ApiPath(name): ApiPath<String>) -> Answer {
-    let w = snapshot(&h).await?;
-    let l = w
-        .light(&name)
-        .ok_or_else(|| Problem::not_found(format!("no light is named {:?}", name)))?;
-    let mut v = serde_json::to_value(LightDto::from(l)).unwrap_or_default();
-    v["name"] = json!(name);
-    Ok(read_answer(w.revision(), v))
-}
-
-pub(super) async fn put_light(
-    State(h): State<Handle>,
-    ApiPath(name): ApiPath<String>,
-    req: WriteJson<LightDto>,
-) -> Answer {
-    let light = req.value.into();
-    write(
-        &h,
-        Edit::PutLight { name, light },
-        req.expected,
-        StatusCode::OK,
-    )
-    .await
-}
-
-pub(super) async fn delete_light(
-    State(h): State<Handle>,
-    IfMatch(expected): IfMatch,
-    ApiPath(name): ApiPath<String>,
-    _unused: Unused,
-) -> Answer {
-    write(&h, Edit::DeleteLight { name }, expected, StatusCode::OK).await
 }

@@ -5,11 +5,11 @@ use axum::Json;
 use axum::extract::State;
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
-use serde_json::json;
 
 use super::precondition::Unused;
 use super::{Answer, AppState, snapshot, world_size};
 use crate::server::actor::CheckpointError;
+use crate::server::dto::{Health, Ready};
 use crate::server::metrics;
 use crate::server::problem::Problem;
 
@@ -18,7 +18,11 @@ const READY_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
 
 /// Liveness: the process serves HTTP. Answers without waiting for the world's owner.
 pub(super) async fn healthz(State(s): State<AppState>) -> Response {
-    Json(json!({"status": "ok", "revision": s.feed.revision()})).into_response()
+    Json(Health {
+        status: "ok",
+        revision: s.feed.revision(),
+    })
+    .into_response()
 }
 
 /// Readiness: the world's owner answers promptly and its storage works.
@@ -34,11 +38,11 @@ pub(super) async fn readyz(State(s): State<AppState>) -> Answer {
     let w = tokio::time::timeout(READY_WAIT, snapshot(&s.handle))
         .await
         .map_err(|_| Problem::busy("the world's owner did not answer within 2 s", 1))??;
-    Ok(Json(json!({
-        "status": "ready",
-        "revision": w.revision(),
-        "queue": s.handle.queue_depth(),
-    }))
+    Ok(Json(Ready {
+        status: "ready",
+        revision: w.revision(),
+        queue: s.handle.queue_depth(),
+    })
     .into_response())
 }
 
