@@ -5,9 +5,10 @@
 //! images and their PNG encoding; [`lines`] draws anti-aliased lines; [`raster`] makes
 //! the pixel pictures (z-buffer, shaded, wireframe, depth and body ids); [`hidden`]
 //! computes the exact hidden-line drawing as vector segments (and draws it, or writes it
-//! as SVG); [`render`] chooses among them by [`Mode`]. Two private modules serve them:
+//! as SVG); [`render`] chooses among them by [`Mode`]. Three private modules serve them:
 //! `buffers`, a pool of large pixel buffers kept from one picture for the next (give a
-//! picture's buffers back with [`raster::Frame::recycle`] and [`RgbImage::recycle`]),
+//! picture's buffers back with [`raster::Frame::recycle`] and [`RgbImage::recycle`]);
+//! `cache`, the shadow maps a scene keeps for its pictures ([`raster::ShadowCache`]);
 //! and `deflate`, the parallel DEFLATE encoder behind the PNG files.
 //!
 //! Every mode starts from the same camera ([`crate::camera::View`]) and the same clipping
@@ -15,6 +16,7 @@
 //! segment all describe the same picture.
 
 pub(crate) mod buffers;
+mod cache;
 mod deflate;
 pub mod hidden;
 pub mod image;

@@ -20,7 +20,7 @@ use rayon::prelude::*;
 
 use crate::model::{BodyId, Bounds, Color, FaceId, Light, World};
 
-use super::raster::ShadowCache;
+use super::cache::ShadowCache;
 
 /// One body of the scene.
 #[derive(Clone, Debug, PartialEq)]

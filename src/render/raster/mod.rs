@@ -19,8 +19,12 @@
 //! the world's lights, which depend on the scene alone and are kept with it (see
 //! [`ShadowCache`]); any number of cameras can render the same scene at once.
 
+mod cube;
 mod fill;
+mod rays;
 pub mod shade;
+mod shadow;
+mod srgb;
 mod sun;
 #[cfg(test)]
 mod tests;
@@ -32,12 +36,13 @@ use crate::camera::View;
 use crate::model::BodyId;
 
 use super::buffers;
+pub use super::cache::ShadowCache;
 use super::image::{Gray16, RgbImage};
 use super::lines::draw_line;
 use super::scene::Scene;
 use fill::{Band, Ids, Perspective, Scratch, Sink};
 
-pub use shade::{Shading, ShadowCache, shaded};
+pub use shade::{Shading, shaded};
 
 /// The face value of a pixel that shows no surface.
 pub const NO_FACE: u32 = u32::MAX;

@@ -31,11 +31,12 @@
 //!
 //! * a sun, an orthographic depth map looking along its direction. The map of each of the
 //!   world's suns covers the whole scene, [`KEPT_SUN_SIDE`] texels on its longer side, and
-//!   is kept with the scene ([`ShadowCache`]): it depends on the scene and the light, not
-//!   on the camera, so it is made by the first picture of a revision and shared by all
-//!   the others. A picture that shows only a small part of the world (its texels would be
-//!   more than [`REFIT`] times those of a map fitted to the light-space footprint of the
-//!   visible pixels) gets a map fitted to it instead, made for it alone;
+//!   is kept with the scene ([`ShadowCache`](super::ShadowCache)): it depends on the
+//!   scene and the light, not on the camera, so it is made by the first picture of a
+//!   revision and shared by all the others. A picture that shows only a small part of
+//!   the world (its texels would be more than [`REFIT`] times those of a map fitted to
+//!   the light-space footprint of the visible pixels) gets a map fitted to it instead,
+//!   made for it alone;
 //! * a point light, a cube of six 90° perspective maps around it, kept likewise.
 //!
 //! The maps hold the *far* sides of occluders (the faces turned away from the light) —
@@ -54,23 +55,32 @@
 //! face as a whole where it can (made once with the map, `SunMap::classify`): a face
 //! the sun sees entirely, or not at all, needs no test at any of its pixels. The pixels
 //! are lit band by band as soon as the z-buffer's band is drawn, while it is in the cache.
+//!
+//! This module lights the pixels. The maps are made in `sun` (a sun's) and `cube` (a point
+//! light's); their kept sizes, their fitting to a picture and the bias of a lookup are in
+//! `shadow`; the sRGB tables in `srgb`; a camera's pixel rays in `rays`.
 
 use std::cell::RefCell;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::camera::View;
-use crate::model::{Camera, Intrinsics, Light};
+use crate::model::Light;
+use crate::render::buffers;
 use crate::render::image::RgbImage;
 use crate::render::scene::Scene;
 
-use super::fill::{self, Perspective, Scratch};
-use super::sun::{FACE_DARK, FACE_LIT, Sight, SunMap};
+use super::cube::CubeMap;
+use super::fill::Scratch;
+use super::rays::Rays;
+use super::shadow::{Axes, EMPTY, SAMPLED_ROWS, fitted_texel, footprints, frame_footprints, union};
+pub use super::shadow::{KEPT_CUBE_SIDE, KEPT_SUN_SIDE, REFIT};
+use super::srgb::{encode_one, linear_to_srgb, srgb_to_linear};
+use super::sun::{FACE_DARK, FACE_LIT, MARK_CHUNK, Sight, SunMap};
 use super::{Frame, NO_FACE, rasterize_with};
-use crate::render::buffers;
 
 /// How [`shaded`] draws.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,10 +94,10 @@ pub struct Shading {
     /// Texels on the longer side of a sun's shadow map and on the side of each of a
     /// point light's six maps, made fresh for the picture (a sun's fitted to what the
     /// picture shows). 0 (the default) uses the maps kept with the scene
-    /// ([`ShadowCache`]: [`KEPT_SUN_SIDE`] texels over the whole scene for a sun,
-    /// [`KEPT_CUBE_SIDE`] for a point light), except that a sun whose kept map would be
-    /// coarser than [`REFIT`] times a fitted one gets a fitted map of ¾ of the picture's
-    /// longer side (between 256 and 4096 texels).
+    /// ([`ShadowCache`](super::ShadowCache): [`KEPT_SUN_SIDE`] texels over the whole
+    /// scene for a sun, [`KEPT_CUBE_SIDE`] for a point light), except that a sun whose
+    /// kept map would be coarser than [`REFIT`] times a fitted one gets a fitted map of ¾
+    /// of the picture's longer side (between 256 and 4096 texels).
     pub shadow_map_size: u32,
 }
 
@@ -99,90 +109,6 @@ impl Default for Shading {
             shadows: true,
             shadow_map_size: 0,
         }
-    }
-}
-
-/// Texels on the longer side of a sun's kept shadow map (which covers the whole scene).
-pub const KEPT_SUN_SIDE: usize = 1024;
-
-/// Texels on the side of each of the six kept shadow maps of a point light.
-pub const KEPT_CUBE_SIDE: usize = 1024;
-
-/// A sun's kept shadow map serves a picture as long as its texels are at most this many
-/// times the size of those of a map fitted to what the picture shows.
-pub const REFIT: f64 = 2.0;
-
-/// The shadow maps of a scene's own lights, made on first use and kept with the scene:
-/// they depend on the scene and the light, not on the camera, so every picture of one
-/// revision shares them. A sun's kept map covers the whole scene; a point light's is a
-/// cube around it.
-///
-/// Precondition: the scene does not change after its first shaded picture (a scene is
-/// one revision of the world); a caller that edits a scene in place calls
-/// [`ShadowCache::clear`]. A clone of a scene starts with no maps.
-#[derive(Default)]
-pub struct ShadowCache {
-    /// Per light (index into [`Scene::lights`]), its map once made.
-    kept: Mutex<Vec<(usize, Arc<OnceLock<Kept>>)>>,
-}
-
-/// A kept map: `None` when the light has nothing to shadow.
-#[derive(Clone)]
-enum Kept {
-    Sun(Option<Arc<SunMap>>),
-    Cube(Option<Arc<CubeMap>>),
-}
-
-impl ShadowCache {
-    /// The map kept for light `light`, made by `make` if it is not there yet. Two pictures
-    /// asking at once share one making.
-    fn get(&self, light: usize, make: impl FnOnce() -> Kept) -> Kept {
-        let cell = {
-            let mut kept = self.kept.lock().unwrap_or_else(PoisonError::into_inner);
-            match kept.iter().find(|(l, _)| *l == light) {
-                Some((_, cell)) => Arc::clone(cell),
-                None => {
-                    let cell = Arc::new(OnceLock::new());
-                    kept.push((light, Arc::clone(&cell)));
-                    cell
-                }
-            }
-        };
-        cell.get_or_init(make).clone()
-    }
-
-    /// How many maps are kept.
-    pub fn len(&self) -> usize {
-        let kept = self.kept.lock().unwrap_or_else(PoisonError::into_inner);
-        kept.iter().filter(|(_, cell)| cell.get().is_some()).count()
-    }
-
-    /// Whether no map is kept.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Forgets every kept map.
-    pub fn clear(&mut self) {
-        self.kept
-            .get_mut()
-            .unwrap_or_else(PoisonError::into_inner)
-            .clear();
-    }
-}
-
-impl Clone for ShadowCache {
-    /// An empty cache: maps are made again for the copy.
-    fn clone(&self) -> ShadowCache {
-        ShadowCache::default()
-    }
-}
-
-impl std::fmt::Debug for ShadowCache {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("ShadowCache")
-            .field("maps", &self.len())
-            .finish()
     }
 }
 
@@ -311,20 +237,17 @@ fn attach_maps(
         match lamp {
             Lamp::Sun { toward, map, .. } => {
                 let direction = -*toward;
-                let make = || Kept::Sun(SunMap::whole(scene, direction).map(Arc::new));
-                if let Some(Kept::Sun(Some(m))) = kept.map(|l| scene.shadows.get(l, make)) {
+                let make = || SunMap::whole(scene, direction);
+                if let Some(m) = kept.and_then(|l| scene.shadows.get(l, make)) {
                     *map = Some(Sight::new(m, rays));
                 }
             }
             Lamp::Point { position, map, .. } => {
                 let position = *position;
-                let make = || {
-                    CubeMap::new(scene, position, cube_side, &mut Scratch::default()).map(Arc::new)
-                };
-                *map = match kept.map(|l| scene.shadows.get(l, || Kept::Cube(make()))) {
-                    Some(Kept::Cube(m)) => m,
-                    Some(Kept::Sun(_)) => None,
-                    None => make(),
+                let make = || CubeMap::new(scene, position, cube_side, &mut Scratch::default());
+                *map = match kept {
+                    Some(l) => scene.shadows.get(l, make),
+                    None => make().map(Arc::new),
                 };
             }
         }
@@ -370,47 +293,6 @@ fn lamps(scene: &Scene, rays: &Rays) -> Vec<(Option<usize>, Lamp)> {
             (i, lamp)
         })
         .collect()
-}
-
-/// Pixel rays of a camera in world coordinates.
-pub(super) struct Rays {
-    /// The lens centre.
-    pub(super) eye: DVec3,
-    /// The camera's i, j, k in world coordinates.
-    frame: DMat3,
-    /// Ray direction (scaled to unit depth) at pixel (0, 0).
-    pub(super) d0: DVec3,
-    /// Its change per pixel to the right.
-    pub(super) du: DVec3,
-    /// Its change per pixel down.
-    pub(super) dv: DVec3,
-}
-
-impl Rays {
-    fn new(view: &View) -> Rays {
-        // Rows of the world-to-camera rotation are i, j, k.
-        let r = DMat3::from_cols(
-            view.direction_to_camera(DVec3::X),
-            view.direction_to_camera(DVec3::Y),
-            view.direction_to_camera(DVec3::Z),
-        );
-        let frame = r.transpose();
-        let (i, j, k) = (frame.x_axis, frame.y_axis, frame.z_axis);
-        let kk = &view.intrinsics;
-        Rays {
-            eye: view.eye(),
-            frame,
-            d0: -i * (kk.cx / kk.fx) + j * (kk.cy / kk.fy) - k,
-            du: i / kk.fx,
-            dv: -j / kk.fy,
-        }
-    }
-
-    /// The world point at `depth` on the ray through pixel coordinates (`u`, `v`).
-    #[inline]
-    fn point(&self, u: f64, v: f64, depth: f64) -> DVec3 {
-        self.eye + (self.d0 + self.du * u + self.dv * v) * depth
-    }
 }
 
 /// The default sun: intensity 0.8, shining from behind the camera, above and to its left.
@@ -517,9 +399,6 @@ const FETCH_ROWS: usize = 4;
 
 /// Scenes with more faces than this (about 2 MB of them) have them fetched ahead.
 const FETCH_FACES: usize = 1 << 15;
-
-/// Every this many rows are enough to decide whether a kept sun map is too coarse.
-const SAMPLED_ROWS: usize = 4;
 
 /// At most this many suns (and no point light) are lit through a per-face palette.
 const PALETTE_SUNS: usize = 4;
@@ -808,9 +687,6 @@ fn fill_rgb(run: &mut [u8], colour: [u8; 3]) {
     }
 }
 
-/// Pixels [`Sight::mark`] takes at a time.
-pub(super) const MARK_CHUNK: usize = 64;
-
 /// Runs of at least this many pixels of one face are first tested for shadow as a whole
 /// ([`Sight::run`]).
 const RUN: usize = 6;
@@ -902,277 +778,11 @@ impl Palettes {
     }
 }
 
-/// The slope-scaled part of the shadow bias, in texels, for a surface lit at incidence
-/// cosine `nl` (> 0): ¾ texel of the surface's depth slope (capped at 3, past which the
-/// light is dim and a larger bias would let light leak under bodies standing on the
-/// surface), plus half a texel.
-#[inline]
-pub(super) fn bias_texels(nl: f64) -> f64 {
-    let slope = ((1.0 - nl * nl).max(0.0).sqrt() / nl).min(3.0);
-    0.75 * slope + 0.5
-}
-
-/// A sun's light-space axes `s`, `t` across its rays ([`sun_axes`]).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Axes {
-    pub(super) s: DVec3,
-    pub(super) t: DVec3,
-}
-
-impl Axes {
-    /// The axes of the sun in direction `toward` (unit).
-    pub(super) fn new(toward: DVec3) -> Axes {
-        let (s, t) = sun_axes(-toward);
-        Axes { s, t }
-    }
-}
-
-/// An empty light-space box `[x_min, x_max, y_min, y_max]`.
-pub(super) const EMPTY: [f64; 4] = [
-    f64::INFINITY,
-    f64::NEG_INFINITY,
-    f64::INFINITY,
-    f64::NEG_INFINITY,
-];
-
-/// The smallest box holding boxes `a` and `b`.
-pub(super) fn union(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
-    [
-        a[0].min(b[0]),
-        a[1].max(b[1]),
-        a[2].min(b[2]),
-        a[3].max(b[3]),
-    ]
-}
-
-/// For each of `suns` (`None` for a lamp that needs no fitting), the light-space box of
-/// the points a band of the picture shows: rows from `y0`, `width` pixels wide, with the
-/// frame's `depth` and `face` values; only the rows whose index is a multiple of `step`. (Points on faces turned away from a sun are
-/// included; they make the box no smaller, and leaving them out would cost a look at
-/// every face.)
-///
-/// Along a row, the pixels of one face show points on one straight line (the face's plane
-/// meets the plane through the eye and the row), so only the two ends of each run of a
-/// face need to be reconstructed.
-fn footprints(
-    rays: &Rays,
-    suns: &[Option<Axes>],
-    y0: usize,
-    width: usize,
-    depth: &[f32],
-    face: &[u32],
-    step: usize,
-) -> Vec<[f64; 4]> {
-    let mut acc = vec![EMPTY; suns.len()];
-    for (r, (depths, faces)) in depth
-        .chunks(width)
-        .zip(face.chunks(width))
-        .enumerate()
-        .filter(|(r, _)| (y0 + r).is_multiple_of(step))
-    {
-        let py = (y0 + r) as f64 + 0.5;
-        let mut x = 0;
-        while x < faces.len() {
-            let f = faces[x];
-            let mut end = x + 1;
-            while end < faces.len() && faces[end] == f {
-                end += 1;
-            }
-            if f != NO_FACE {
-                for xs in [x, end - 1] {
-                    let p = rays.point(xs as f64 + 0.5, py, depths[xs] as f64);
-                    if !p.is_finite() {
-                        continue;
-                    }
-                    for (b, sun) in acc.iter_mut().zip(suns) {
-                        if let Some(a) = sun {
-                            let (u, v) = (a.s.dot(p), a.t.dot(p));
-                            *b = union(*b, [u, u, v, v]);
-                        }
-                    }
-                }
-            }
-            x = end;
-        }
-    }
-    acc
-}
-
-/// [`footprints`] of every row of `frame`, band by band: per band, per sun.
-fn frame_footprints(rays: &Rays, suns: &[Option<Axes>], frame: &Frame) -> Vec<Vec<[f64; 4]>> {
-    let w = frame.width as usize;
-    let rows = 16;
-    frame
-        .depth
-        .par_chunks(w * rows)
-        .zip(frame.face.par_chunks(w * rows))
-        .enumerate()
-        .map(|(b, (depth, face))| footprints(rays, suns, b * rows, w, depth, face, 1))
-        .collect()
-}
-
-/// The light-space axes (s, t) across a sun's rays travelling along unit `direction`.
-pub(super) fn sun_axes(direction: DVec3) -> (DVec3, DVec3) {
-    direction.any_orthonormal_pair()
-}
-
-/// Texels at the edge of a sun's map, around its footprint.
-pub(super) const PAD: f64 = 2.0;
-
-/// The texel side (meters) of a sun map `side` texels long over light-space box
-/// `footprint`, in a scene whose bounds' diagonal is `diag`.
-pub(super) fn fitted_texel(footprint: [f64; 4], side: usize, diag: f64) -> f64 {
-    let extent = (footprint[1] - footprint[0])
-        .max(footprint[3] - footprint[2])
-        .max(diag * 1e-9)
-        .max(1e-9);
-    extent / (side.max(8) as f64 - 2.0 * PAD)
-}
-
-/// A point light's shadow cube: six 90° views, +x, −x, +y, −y, +z, −z.
-struct CubeMap {
-    position: DVec3,
-    views: Vec<View>,
-    side: usize,
-    /// Keys (1/depth) of the nearest far-side surface per texel of each view; 0 where
-    /// none.
-    keys: Vec<Vec<f32>>,
-    /// Constant bias, meters.
-    eps: f64,
-}
-
-impl Drop for CubeMap {
-    fn drop(&mut self) {
-        self.keys.drain(..).for_each(buffers::give);
-    }
-}
-
-impl CubeMap {
-    /// The cube of `side`-texel maps around `position`. `None` for a scene without
-    /// geometry or a light whose views cannot be made (a non-finite position).
-    fn new(scene: &Scene, position: DVec3, side: usize, scratch: &mut Scratch) -> Option<CubeMap> {
-        let bounds = scene.bounds?;
-        let side = side.clamp(2, crate::model::camera::MAX_IMAGE_SIDE as usize);
-        let k = Intrinsics::centered(side as u32, side as u32, side as f64 / 2.0).ok()?;
-        let axes = [
-            (DVec3::X, DVec3::Z),
-            (DVec3::NEG_X, DVec3::Z),
-            (DVec3::Y, DVec3::Z),
-            (DVec3::NEG_Y, DVec3::Z),
-            (DVec3::Z, DVec3::Y),
-            (DVec3::NEG_Z, DVec3::Y),
-        ];
-        let mut views = Vec::with_capacity(6);
-        for (axis, up) in axes {
-            let cam = Camera::look_at(position, position + axis, up, k).ok()?;
-            views.push(View::new(&cam, 1e-4));
-        }
-        let keys = views
-            .iter()
-            .map(|view| {
-                // Cleared band by band while drawing.
-                let mut key = buffers::take::<f32>(side * side);
-                let proj = Perspective {
-                    view: *view,
-                    front: false,
-                };
-                fill::draw_keys(scene, &proj, side, side, &mut key, scratch);
-                key
-            })
-            .collect();
-        let reach = (bounds.max - bounds.min).length()
-            + (position - (bounds.min + bounds.max) / 2.0).length();
-        Some(CubeMap {
-            position,
-            views,
-            side,
-            keys,
-            eps: reach * 2e-6,
-        })
-    }
-
-    /// Whether the light sees `p`, on a surface lit at incidence cosine `nl`.
-    #[inline]
-    fn lit(&self, p: DVec3, nl: f64) -> bool {
-        let d = p - self.position;
-        let a = d.abs();
-        let f = if a.x >= a.y && a.x >= a.z {
-            usize::from(d.x < 0.0)
-        } else if a.y >= a.z {
-            2 + usize::from(d.y < 0.0)
-        } else {
-            4 + usize::from(d.z < 0.0)
-        };
-        let view = &self.views[f];
-        let c = view.to_camera(p);
-        let depth = -c.z;
-        if depth.is_nan() || depth <= 0.0 {
-            return true;
-        }
-        let uv = view.project(c);
-        let last = self.side as f64 - 1.0;
-        let x = uv.x.floor().max(0.0).min(last) as usize;
-        let y = uv.y.floor().max(0.0).min(last) as usize;
-        let k = self.keys[f][y * self.side + x] as f64;
-        if k.is_nan() || k <= 0.0 {
-            return true;
-        }
-        let texel = depth * 2.0 / self.side as f64;
-        1.0 / k >= depth - texel * bias_texels(nl) - self.eps
-    }
-}
-
-/// Entries of the linear-to-sRGB table.
-const ENCODE_STEPS: usize = 1 << 14;
-
-/// 8-bit sRGB to linear light (the IEC 61966-2-1 curve), a table computed once.
-fn srgb_to_linear() -> &'static [f32; 256] {
-    static TABLE: OnceLock<[f32; 256]> = OnceLock::new();
-    TABLE.get_or_init(|| {
-        std::array::from_fn(|i| {
-            let c = i as f64 / 255.0;
-            let l = if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            };
-            l as f32
-        })
-    })
-}
-
-/// Linear light in [0, 1] (sampled at [`ENCODE_STEPS`] points) to 8-bit sRGB, a table
-/// computed once.
-fn linear_to_srgb() -> &'static [u8] {
-    static TABLE: OnceLock<Vec<u8>> = OnceLock::new();
-    TABLE.get_or_init(|| {
-        (0..ENCODE_STEPS)
-            .map(|i| {
-                let l = i as f64 / (ENCODE_STEPS - 1) as f64;
-                let c = if l <= 0.003_130_8 {
-                    12.92 * l
-                } else {
-                    1.055 * l.powf(1.0 / 2.4) - 0.055
-                };
-                (c * 255.0).round().clamp(0.0, 255.0) as u8
-            })
-            .collect()
-    })
-}
-
-/// One linear value to 8-bit sRGB through `table` ([`linear_to_srgb`]); values above 1
-/// clamp to 255, below 0 (or NaN) to 0.
-#[inline(always)]
-fn encode_one(table: &[u8], l: f32) -> u8 {
-    let i = (l * (ENCODE_STEPS - 1) as f32 + 0.5).clamp(0.0, (ENCODE_STEPS - 1) as f32);
-    table[i as usize]
-}
-
 #[cfg(test)]
 pub(super) mod testing {
     //! Shading internals the module tests check against.
 
-    use super::{Kept, PoisonError, Scene};
+    use super::{Scene, SunMap};
 
     /// [`super::SunMap::classify`]'s answer: the sun sees the whole face.
     pub const FACE_LIT: u8 = super::FACE_LIT;
@@ -1182,20 +792,12 @@ pub(super) mod testing {
     /// The per-face classes of the sun map kept for light `light` of `scene` (every face
     /// worked out), once a picture has made the map.
     pub fn face_classes(scene: &Scene, light: usize) -> Option<Vec<u8>> {
-        let kept = scene
-            .shadows
-            .kept
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner);
-        let (_, cell) = kept.iter().find(|(l, _)| *l == light)?;
-        match cell.get()? {
-            Kept::Sun(Some(m)) => Some(
-                (0..m.faces.len() as u32)
-                    .map(|f| m.face(scene, f))
-                    .collect(),
-            ),
-            _ => None,
-        }
+        let m = scene.shadows.made::<SunMap>(light)?;
+        Some(
+            (0..m.faces.len() as u32)
+                .map(|f| m.face(scene, f))
+                .collect(),
+        )
     }
 
     /// [`super::run_end`].

@@ -13,9 +13,8 @@ use crate::render::buffers;
 use crate::render::scene::{Scene, SceneFace};
 
 use super::fill::{self, Projection, Scratch};
-use super::shade::{
-    Axes, EMPTY, KEPT_SUN_SIDE, MARK_CHUNK, PAD, Rays, bias_texels, fitted_texel, sun_axes, union,
-};
+use super::rays::Rays;
+use super::shadow::{Axes, EMPTY, KEPT_SUN_SIDE, PAD, bias_texels, fitted_texel, sun_axes, union};
 
 /// An orthographic view along a sun's rays: pixel (u, v) is light-space
 /// ((u/scale + x0)·s + (v/scale + y0)·t); the key is `zc − w·p` (nearer the sun larger,
@@ -502,6 +501,9 @@ fn tile(key: &[f32], width: usize, height: usize, unit: f64) -> (usize, Vec<u16>
         });
     (tiles, out)
 }
+
+/// Pixels [`Sight::mark`] takes at a time.
+pub(super) const MARK_CHUNK: usize = 64;
 
 /// A sun map as one picture uses it.
 pub(super) struct Sight {
