@@ -21,8 +21,8 @@ use glam::{DQuat, DVec3};
 use winged::camera::{Camera, Intrinsics};
 use winged::render::{Mode, Options, Picture, SHADED_BACKGROUND, Scene, render};
 use winged::server::demo::demo_world;
-use winged::solve::align::{AlignOptions, align_to_image};
-use winged::solve::image::{EdgeMap, EdgeOptions, Luma};
+use winged::vision::image::{EdgeMap, EdgeOptions, Luma};
+use winged::vision::solve::align::{AlignOptions, align_to_image};
 
 #[path = "../bench/rng.rs"]
 #[allow(dead_code)] // each bench uses some of its methods

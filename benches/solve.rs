@@ -16,7 +16,7 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{DMat3, DQuat, DVec2, DVec3};
-use winged::solve::{CvPose, PixelIntrinsics, PnpOptions, solve_pnp, sqpnp};
+use winged::vision::solve::{CvPose, PixelIntrinsics, PnpOptions, solve_pnp, sqpnp};
 
 const K: PixelIntrinsics = PixelIntrinsics {
     fx: 800.0,

@@ -21,7 +21,9 @@ use std::time::Instant;
 
 use glam::{DMat3, DVec2, DVec3};
 use serde_json::{Value, json};
-use winged::solve::{CvPose, PixelIntrinsics, PnpOptions, solve_pnp, solve_pnp_focal, sqpnp};
+use winged::vision::solve::{
+    CvPose, PixelIntrinsics, PnpOptions, solve_pnp, solve_pnp_focal, sqpnp,
+};
 
 const FAIL_DEGREES: f64 = 5.0;
 

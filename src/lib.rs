@@ -2,7 +2,8 @@
 //!
 //! [`model`] is the geometric kernel: pure, synchronous Rust with no I/O. It can be used
 //! as a library on its own. [`camera`] projects and clips for a camera; [`render`] draws
-//! what the world looks like from one. [`server`] serves it over HTTP/JSON; [`store`] makes it
+//! what the world looks like from one; [`vision`] reads pictures and solves for the camera
+//! that took them. [`server`] serves it over HTTP/JSON; [`store`] makes it
 //! durable (a journal of applied edits plus snapshots).
 //!
 //! # Layers
@@ -19,19 +20,19 @@
 //! | `mesh`: file formats | model |
 //! | [`camera`]: projection and clipping | model |
 //! | [`render`]: appearance | model, spatial, camera |
-//! | [`solve`] (becoming `vision`): image analysis and camera solution | model, spatial, camera, render |
+//! | [`vision`]: image analysis and camera solution | model, spatial, camera, render |
 //! | [`server`]: the owner, HTTP, events, auth, metrics | everything below |
 //!
-//! `mesh` and `vision` are to come.
+//! `mesh` is to come.
 
 pub mod camera;
 pub mod edit;
 pub mod model;
 pub mod render;
 pub mod server;
-pub mod solve;
 pub mod spatial;
 pub mod store;
+pub mod vision;
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

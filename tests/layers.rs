@@ -19,12 +19,11 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("mesh", &["model"]),
     ("camera", &["model"]),
     ("render", &["model", "spatial", "camera"]),
-    ("solve", &["model", "spatial", "camera", "render"]),
     ("vision", &["model", "spatial", "camera", "render"]),
     (
         "server",
         &[
-            "model", "spatial", "edit", "store", "mesh", "camera", "render", "solve", "vision",
+            "model", "spatial", "edit", "store", "mesh", "camera", "render", "vision",
         ],
     ),
 ];

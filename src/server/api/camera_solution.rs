@@ -86,9 +86,9 @@ use crate::server::limits::{
 };
 use crate::server::problem::Problem;
 use crate::server::request::{IntrinsicsDto, PoseDto};
-use crate::solve::align::{AlignOptions, align_to_image};
-use crate::solve::image::Luma;
-use crate::solve::{
+use crate::vision::image::Luma;
+use crate::vision::solve::align::{AlignOptions, align_to_image};
+use crate::vision::solve::{
     PixelIntrinsics, PnpOptions, PnpSolution, SolveError, rotation_vector, solve_pnp,
     solve_pnp_focal,
 };
@@ -343,10 +343,10 @@ impl SolveReq {
             o.max_iterations = n;
         }
         if let Some(n) = self.min_inliers {
-            if n < crate::solve::MIN_CONSENSUS {
+            if n < crate::vision::solve::MIN_CONSENSUS {
                 return bad(
                     "min_inliers",
-                    &format!("must be at least {}", crate::solve::MIN_CONSENSUS),
+                    &format!("must be at least {}", crate::vision::solve::MIN_CONSENSUS),
                 );
             }
             o.min_inliers = n;

@@ -261,7 +261,7 @@ pub fn rotation_vector(r: &DMat3) -> DVec3 {
 mod tests {
     use super::*;
 
-    use crate::solve::testing::Rng;
+    use crate::vision::testing::Rng;
 
     const K: PixelIntrinsics = PixelIntrinsics {
         fx: 800.0,

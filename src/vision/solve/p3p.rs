@@ -469,7 +469,7 @@ fn null_directions(f: DVec3) -> Vec<DVec3> {
 mod tests {
     use super::*;
 
-    use crate::solve::testing::Rng;
+    use crate::vision::testing::Rng;
 
     /// A random pose and three points in front of it (camera frame in [-2,2]²×[2,8]),
     /// returned as (pose, bearings, world points).

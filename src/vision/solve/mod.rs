@@ -23,6 +23,12 @@
 //!   and pixel aspect known): RANSAC over direct linear transforms (or homographies, for
 //!   planar points), refinement of pose and focal length together, and a refusal when the
 //!   view does not determine the focal length.
+//! * [`align_to_image`](align::align_to_image): the camera whose view of the world model
+//!   best matches a picture's edges, from a camera roughly known.
+//!
+//! [`refine_pose`] and [`align_to_image`](align::align_to_image) share one
+//! Levenberg–Marquardt driver over the six degrees of freedom of a pose (the private `lm`
+//! module): the damped step, the damping's schedule and the stopping rules.
 //!
 //! # Convention
 //!
@@ -38,13 +44,13 @@
 //! normalised coordinates is the caller's business, with the intrinsics it trusts.
 //!
 //! The interface uses glam's `f64` types like the rest of the crate; nalgebra is used
-//! inside for the decompositions and solves glam does not have, except in SQPnP's inner
-//! loops, which use the fixed-size routines of the private `small` module.
+//! inside for the decompositions and solves glam does not have and for SQPnP's 9-vectors,
+//! except in SQPnP's eigen-decomposition, 3×3 solves and nearest rotations, which use the
+//! fixed-size routines of the private `small` module.
 
 pub mod align;
-mod damping;
 pub mod focal;
-pub mod image;
+mod lm;
 pub mod p3p;
 pub mod pnp;
 pub mod ransac;
@@ -52,8 +58,6 @@ pub mod refine;
 mod sampler;
 mod small;
 pub mod sqpnp;
-#[cfg(test)]
-mod testing;
 
 pub use focal::{FocalSolution, solve_pnp_focal};
 pub use p3p::{MAX_P3P_SOLUTIONS, p3p};

@@ -1,4 +1,4 @@
-//! What the camera-solution tests share: a small deterministic random stream.
+//! What the vision tests share: a small deterministic random stream.
 
 use glam::{DMat3, DQuat, DVec3};
 

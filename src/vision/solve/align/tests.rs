@@ -3,7 +3,7 @@ use glam::{DQuat, DVec3};
 use super::*;
 use crate::render::{Mode, Options, Picture, SHADED_BACKGROUND, render};
 use crate::server::demo::demo_world;
-use crate::solve::testing::Rng;
+use crate::vision::testing::Rng;
 
 /// The camera of the tests: 640 × 480, f = 600, 2 m from the blocks on the demo table.
 fn true_camera() -> Camera {

@@ -1,6 +1,6 @@
 //! Grey-level pictures: from decoded samples, and halved for a pyramid.
 
-use crate::solve::SolveError;
+use crate::vision::solve::SolveError;
 
 /// An 8-bit grey-level picture, row-major from the top-left pixel, in the camera's pixel
 /// convention (pixel `(x, y)` covers `[x, x+1) × [y, y+1)`, its centre is

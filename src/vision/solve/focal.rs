@@ -746,7 +746,7 @@ fn focal_spread(problem: &Problem<'_>, m: &Model, inliers: &[usize], rms_px: f64
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::testing::Rng;
+    use crate::vision::testing::Rng;
 
     struct Scene {
         world: Vec<DVec3>,

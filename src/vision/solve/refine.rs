@@ -28,10 +28,14 @@
 //! point crosses the camera's plane. Such points are left out of the RMS and counted in
 //! [`Refined::unseen`].
 
-use glam::{DMat3, DQuat, DVec2, DVec3};
-use nalgebra::{Matrix6, Vector6};
+use std::convert::Infallible;
 
-use super::damping::{DampedStep, Damping};
+use glam::{DMat3, DQuat, DVec2, DVec3};
+
+use super::lm::{
+    NormalEquations, PoseEstimate, PoseProblem, PoseStep, Readiness, RoundingTest, Settings,
+    minimise,
+};
 use super::{CvPose, SolveError, check_pairs};
 
 /// The fewest correspondences [`refine_pose`] accepts (six unknowns, two equations each).
@@ -214,68 +218,95 @@ pub fn refine_pose(
         observed,
         loss: options.loss,
     };
-    let tol = options.tolerance;
-    let mut q = DQuat::from_mat3(&initial.rotation).normalize();
-    let mut t = initial.translation;
-    let mut current = problem.evaluate(q, t, true);
-    let mut damping = Damping::new();
-    let mut iterations = 0;
-    let mut converged = false;
+    let pose = PoseEstimate::new(initial.rotation, initial.translation);
+    let current = problem.evaluate(pose.rotation, pose.translation, true);
     if !current.cost.is_finite() {
         return Err(SolveError::NonFinite {
             what: "reprojection cost at the initial pose",
         });
     }
+    let mut refinement = Refinement {
+        problem,
+        tolerance: options.tolerance,
+        pose,
+        current,
+        tried: None,
+    };
+    let settings = Settings {
+        max_iterations: options.max_iterations,
+        cost_rounding: COST_ROUNDING,
+        rounding_test: RoundingTest::EveryStep,
+    };
+    let Ok(outcome) = minimise(&mut refinement, &settings);
 
-    while iterations < options.max_iterations {
-        if current.cost == 0.0 {
-            converged = true;
-            break;
-        }
-        iterations += 1;
-        let Some(DampedStep { step, predicted }) =
-            damping.step(&current.hessian, &current.gradient)
-        else {
-            if !damping.reject() {
-                break;
-            }
-            continue;
-        };
-        let omega = DVec3::new(step[0], step[1], step[2]);
-        let dt = DVec3::new(step[3], step[4], step[5]);
-        if omega.length() <= tol && dt.length() <= tol * (1.0 + t.length()) {
-            converged = true;
-            break;
-        }
-        let q_next = (DQuat::from_scaled_axis(omega) * q).normalize();
-        let t_next = t + dt;
-        let trial = problem.evaluate(q_next, t_next, true);
-        let actual = current.cost - trial.cost;
-        // A change at the level of rounding while the step is still close to Gauss–Newton's
-        // (not a short step forced by heavy damping): nothing left to gain.
-        let flat = damping.is_light() && actual.abs() <= COST_ROUNDING * current.cost;
-        if trial.cost.is_finite() && actual > 0.0 {
-            damping.accept(actual, predicted);
-            (q, t, current) = (q_next, t_next, trial);
-        } else if !damping.reject() {
-            break;
-        }
-        if flat {
-            converged = true;
-            break;
-        }
-    }
-
-    let rotation = DMat3::from_quat(q);
-    let pose = CvPose::new(rotation, t);
-    let fit = problem.evaluate(q, t, false);
+    let PoseEstimate {
+        rotation: q,
+        translation: t,
+    } = refinement.pose;
+    let pose = CvPose::new(DMat3::from_quat(q), t);
+    let fit = refinement.problem.evaluate(q, t, false);
     Ok(Refined {
         pose,
         rms: fit.rms(),
         unseen: fit.unseen,
-        iterations,
-        converged,
+        iterations: outcome.iterations,
+        converged: outcome.converged(),
     })
+}
+
+/// A refinement under way: the correspondences, the current pose and its evaluation, and
+/// the pose last tried with its evaluation (kept, so that a step taken need not be
+/// evaluated twice).
+struct Refinement<'a> {
+    problem: Problem<'a>,
+    /// [`RefineOptions::tolerance`].
+    tolerance: f64,
+    pose: PoseEstimate,
+    current: Evaluation,
+    tried: Option<(PoseEstimate, Evaluation)>,
+}
+
+impl PoseProblem for Refinement<'_> {
+    type Error = Infallible;
+
+    fn cost(&self) -> f64 {
+        self.current.cost
+    }
+
+    fn normal_equations(&self) -> &NormalEquations {
+        &self.current.equations
+    }
+
+    /// A zero cost is the minimum: every point is seen exactly where it is observed.
+    fn prepare(&mut self) -> Result<Readiness, Infallible> {
+        Ok(if self.current.cost == 0.0 {
+            Readiness::AtMinimum
+        } else {
+            Readiness::Ready
+        })
+    }
+
+    /// `|δω| ≤ tolerance` (radians) and `|δt| ≤ tolerance·(1 + |t|)`.
+    fn negligible(&self, step: &PoseStep) -> bool {
+        let omega = DVec3::new(step[0], step[1], step[2]);
+        let dt = DVec3::new(step[3], step[4], step[5]);
+        omega.length() <= self.tolerance
+            && dt.length() <= self.tolerance * (1.0 + self.pose.translation.length())
+    }
+
+    fn try_step(&mut self, step: &PoseStep) -> f64 {
+        let next = self.pose.stepped(step);
+        let trial = self.problem.evaluate(next.rotation, next.translation, true);
+        let cost = trial.cost;
+        self.tried = Some((next, trial));
+        cost
+    }
+
+    fn accept(&mut self) {
+        if let Some((pose, evaluation)) = self.tried.take() {
+            (self.pose, self.current) = (pose, evaluation);
+        }
+    }
 }
 
 /// The correspondences and loss of one refinement.
@@ -293,8 +324,8 @@ struct Evaluation {
     squared: f64,
     seen: usize,
     unseen: usize,
-    hessian: Matrix6<f64>,
-    gradient: Vector6<f64>,
+    /// The normal equations of the cost (zero unless asked for).
+    equations: NormalEquations,
 }
 
 impl Evaluation {
@@ -316,8 +347,7 @@ impl Problem<'_> {
             squared: 0.0,
             seen: 0,
             unseen: 0,
-            hessian: Matrix6::zeros(),
-            gradient: Vector6::zeros(),
+            equations: NormalEquations::zeros(),
         };
         for (x, m) in self.world.iter().zip(self.observed) {
             let a = rotation * *x;
@@ -340,17 +370,14 @@ impl Problem<'_> {
             if !with_normal_equations {
                 continue;
             }
-            // ∂r/∂p rows, then J = ∂r/∂p·[−[a]× | I] with a = R·X (left update).
+            // The rows of ∂r/∂p, with a = R·X.
             let inv_z = 1.0 / p.z;
             let rows = [
                 DVec3::new(inv_z, 0.0, -p.x * inv_z * inv_z),
                 DVec3::new(0.0, inv_z, -p.y * inv_z * inv_z),
             ];
-            for (row, r) in rows.iter().zip([residual.x, residual.y]) {
-                let w = a.cross(*row);
-                let j = Vector6::new(w.x, w.y, w.z, row.x, row.y, row.z);
-                out.hessian.syger(weight, &j, &j, 1.0);
-                out.gradient.axpy(weight * r, &j, 1.0);
+            for (row, r) in rows.into_iter().zip([residual.x, residual.y]) {
+                out.equations.add(a, row, r, weight);
             }
         }
         out
@@ -361,7 +388,7 @@ impl Problem<'_> {
 mod tests {
     use super::*;
 
-    use crate::solve::testing::Rng;
+    use crate::vision::testing::Rng;
 
     const F: f64 = 800.0;
 
@@ -636,7 +663,7 @@ mod tests {
                         .cost
                 };
                 let numeric = (cost(1.0) - cost(-1.0)) / (2.0 * h);
-                let analytic = at.gradient[k];
+                let analytic = at.equations.gradient[k];
                 assert!(
                     (numeric - analytic).abs() <= 1e-5 * analytic.abs().max(1e-3),
                     "{loss:?} parameter {k}: {numeric} vs {analytic}"

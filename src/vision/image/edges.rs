@@ -38,9 +38,9 @@ use rayon::prelude::*;
 
 use super::distance::{DistanceField, NO_SITE};
 use super::luma::Luma;
-use crate::solve::SolveError;
+use crate::vision::solve::SolveError;
 
-/// How edges are told from noise (see the [image module's documentation](crate::solve::image)).
+/// How edges are told from noise (see the [image module's documentation](crate::vision::image)).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EdgeOptions {
     /// The threshold in multiples of the estimated noise of one gradient component;
@@ -88,7 +88,7 @@ pub struct Edgel {
 }
 
 /// The edges of a picture and their distance transform. See the
-/// [image module's documentation](crate::solve::image).
+/// [image module's documentation](crate::vision::image).
 ///
 /// Invariants: `at.len() == width × height`; `at[i]` is an index into `edgels` or
 /// [`NO_SITE`]; the field's sites are exactly the pixels with an edgel.
@@ -437,7 +437,7 @@ mod tests {
 
     #[test]
     fn the_threshold_follows_the_noise() {
-        use crate::solve::testing::Rng;
+        use crate::vision::testing::Rng;
         let mut rng = Rng(11);
         let sigma = 6.0;
         let samples: Vec<u8> = (0..200 * 150)

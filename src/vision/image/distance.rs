@@ -22,14 +22,14 @@
 
 use rayon::prelude::*;
 
-use crate::solve::SolveError;
+use crate::vision::solve::SolveError;
 
 /// The value of [`DistanceField::nearest_index`] where there is no site at all.
 pub const NO_SITE: u32 = u32::MAX;
 
 /// For every pixel of a `width × height` grid, the nearest *site* pixel (Euclidean
 /// distance between pixel centres) and so the distance to it. See the
-/// [image module's documentation](crate::solve::image).
+/// [image module's documentation](crate::vision::image).
 ///
 /// Invariant: `nearest.len() == width × height`, and every entry is [`NO_SITE`] (only
 /// when there are no sites) or the row-major index of a site nearest to that pixel.
@@ -228,7 +228,7 @@ impl Envelope {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::testing::Rng;
+    use crate::vision::testing::Rng;
 
     /// The squared distance to the nearest site by trying every site.
     fn brute_force(w: u32, h: u32, sites: &[bool], x: u32, y: u32) -> Option<u64> {

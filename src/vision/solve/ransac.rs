@@ -438,7 +438,7 @@ mod tests {
     use super::*;
     use glam::DMat3;
 
-    use crate::solve::testing::Rng as SceneRng;
+    use crate::vision::testing::Rng as SceneRng;
 
     const F: f64 = 800.0;
 

@@ -63,16 +63,18 @@
 
 use std::collections::HashMap;
 
-use glam::{DMat3, DQuat, DVec2, DVec3};
-use nalgebra::{Matrix6, Vector6};
+use glam::{DMat3, DVec2, DVec3};
 
 use super::SolveError;
-use super::damping::{DampedStep, Damping};
-use super::image::{EdgeMap, EdgeOptions, Luma};
+use super::lm::{
+    NormalEquations, PoseEstimate, PoseProblem, PoseStep, Readiness, RoundingTest, Settings,
+    minimise,
+};
 use super::refine::Loss;
 use crate::camera::{Camera, DEFAULT_NEAR, Intrinsics, View};
 use crate::render::Scene;
 use crate::render::hidden::{Segment, hidden_lines};
+use crate::vision::image::{EdgeMap, EdgeOptions, Luma};
 
 /// The most pyramid levels [`align_to_image`] accepts.
 pub const MAX_LEVELS: usize = 6;
@@ -277,13 +279,10 @@ pub fn align_to_image(
     let levels = Level::pyramid(image, &k, options)?;
 
     let (rotation, translation) = start.to_opencv();
-    let mut pose = Pose {
-        q: DQuat::from_mat3(&rotation).normalize(),
-        t: translation,
-    };
+    let mut pose = PoseEstimate::new(rotation, translation);
     let edge_faces = EdgeFaces::of(scene);
     let spacing = options.sample_spacing_px;
-    let first = sample_edges(scene, &edge_faces, &pose.camera(k)?, options, spacing);
+    let first = sample_edges(scene, &edge_faces, &camera_at(&pose, k)?, options, spacing);
     if first.len() < options.min_samples {
         return Err(SolveError::NoEdgesVisible {
             samples: first.len(),
@@ -304,7 +303,7 @@ pub fn align_to_image(
         return Err(SolveError::DidNotConverge { iterations });
     }
 
-    let camera = pose.camera(k)?;
+    let camera = camera_at(&pose, k)?;
     let samples = sample_edges(scene, &edge_faces, &camera, options, spacing);
     if samples.len() < options.min_samples {
         return Err(SolveError::NoEdgesVisible {
@@ -335,27 +334,13 @@ pub fn align_to_image(
     })
 }
 
-/// A camera pose in OpenCV's frame, the rotation kept as a unit quaternion.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Pose {
-    q: DQuat,
-    t: DVec3,
-}
-
-impl Pose {
-    /// The world's camera of this pose with intrinsics `k`.
-    fn camera(&self, k: Intrinsics) -> Result<Camera, SolveError> {
-        Ok(Camera::from_opencv(DMat3::from_quat(self.q), self.t, k)?)
-    }
-
-    /// The pose after the left-multiplied update `(δω, δt)`.
-    fn stepped(&self, step: &Vector6<f64>) -> Pose {
-        let omega = DVec3::new(step[0], step[1], step[2]);
-        Pose {
-            q: (DQuat::from_scaled_axis(omega) * self.q).normalize(),
-            t: self.t + DVec3::new(step[3], step[4], step[5]),
-        }
-    }
+/// The world's camera at `pose` (OpenCV's frame) with intrinsics `k`.
+fn camera_at(pose: &PoseEstimate, k: Intrinsics) -> Result<Camera, SolveError> {
+    Ok(Camera::from_opencv(
+        DMat3::from_quat(pose.rotation),
+        pose.translation,
+        k,
+    )?)
 }
 
 /// A point on a visible model edge, with the edge's direction (world coordinates).
@@ -464,7 +449,7 @@ struct Level {
 
 /// The result of refining on one level.
 struct LevelOutcome {
-    pose: Pose,
+    pose: PoseEstimate,
     iterations: usize,
     converged: bool,
 }
@@ -529,69 +514,132 @@ impl Level {
         scene: &Scene,
         edge_faces: &EdgeFaces,
         k: &Intrinsics,
-        start: Pose,
+        start: PoseEstimate,
         options: &AlignOptions,
         tracking: bool,
     ) -> Result<LevelOutcome, SolveError> {
         let matcher = self.matcher(options, tracking);
-        let spacing = options.sample_spacing_px / self.scale;
-        let draw = |pose: &Pose| -> Result<Vec<Sample>, SolveError> {
-            let camera = pose.camera(*k)?;
-            Ok(sample_edges(scene, edge_faces, &camera, options, spacing))
+        let drawing = Drawing {
+            scene,
+            edge_faces,
+            k: *k,
+            options,
+            spacing_px: options.sample_spacing_px / self.scale,
         };
-        let mut pose = start;
-        let mut samples = draw(&pose)?;
-        let mut matches = matcher.associate(&samples, pose);
-        let mut current = matcher.fit(&matches, pose, true);
-        let mut damping = Damping::new();
-        let mut iterations = 0;
-        let mut since_drawn = 0;
-        let mut converged = false;
-        while iterations < options.max_iterations {
-            if since_drawn == options.visibility_every {
-                samples = draw(&pose)?;
-                matches = matcher.associate(&samples, pose);
-                current = matcher.fit(&matches, pose, true);
-                since_drawn = 0;
-            }
-            if matches.len() < MIN_MATCHED {
-                break;
-            }
-            iterations += 1;
-            since_drawn += 1;
-            let Some(DampedStep { step, predicted }) =
-                damping.step(&current.hessian, &current.gradient)
-            else {
-                if !damping.reject() {
-                    break;
-                }
-                continue;
-            };
-            let next = pose.stepped(&step);
-            if matcher.largest_motion(&matches, pose, next) <= options.tolerance_px {
-                converged = true;
-                break;
-            }
-            let actual = current.cost - matcher.fit(&matches, next, false).cost;
-            if actual > 0.0 {
-                damping.accept(actual, predicted);
-                let flat = damping.is_light() && actual <= COST_ROUNDING * current.cost;
-                pose = next;
-                matches = matcher.associate(&samples, pose);
-                current = matcher.fit(&matches, pose, true);
-                if flat {
-                    converged = true;
-                    break;
-                }
-            } else if !damping.reject() {
-                break;
-            }
-        }
+        let samples = drawing.samples(&start)?;
+        let matches = matcher.associate(&samples, start);
+        let current = matcher.fit(&matches, start, true);
+        let mut alignment = LevelAlignment {
+            matcher,
+            drawing,
+            pose: start,
+            samples,
+            matches,
+            current,
+            since_drawn: 0,
+            tried: start,
+        };
+        let settings = Settings {
+            max_iterations: options.max_iterations,
+            cost_rounding: COST_ROUNDING,
+            rounding_test: RoundingTest::KeptSteps,
+        };
+        let outcome = minimise(&mut alignment, &settings)?;
         Ok(LevelOutcome {
-            pose,
-            iterations,
-            converged,
+            pose: alignment.pose,
+            iterations: outcome.iterations,
+            converged: outcome.converged(),
         })
+    }
+}
+
+/// What drawing the model's visible edges needs: the scene, the camera's intrinsics and the
+/// sample spacing of a level.
+struct Drawing<'a> {
+    scene: &'a Scene,
+    edge_faces: &'a EdgeFaces,
+    k: Intrinsics,
+    options: &'a AlignOptions,
+    /// Pixels of the picture.
+    spacing_px: f64,
+}
+
+impl Drawing<'_> {
+    /// The samples on the model's edges visible from `pose`.
+    fn samples(&self, pose: &PoseEstimate) -> Result<Vec<Sample>, SolveError> {
+        let camera = camera_at(pose, self.k)?;
+        Ok(sample_edges(
+            self.scene,
+            self.edge_faces,
+            &camera,
+            self.options,
+            self.spacing_px,
+        ))
+    }
+}
+
+/// The alignment on one level under way: the samples drawn at some recent pose, their
+/// matches at the current pose and the cost of those matches. A step is judged by the cost
+/// of the matches it was computed from; once kept, the samples are matched anew at the new
+/// pose, and every [`AlignOptions::visibility_every`] iterations drawn anew.
+struct LevelAlignment<'a> {
+    matcher: Matcher<'a>,
+    drawing: Drawing<'a>,
+    pose: PoseEstimate,
+    samples: Vec<Sample>,
+    matches: Vec<Match>,
+    current: Fit,
+    /// Iterations since the samples were drawn.
+    since_drawn: usize,
+    /// The pose of the last step tried.
+    tried: PoseEstimate,
+}
+
+impl PoseProblem for LevelAlignment<'_> {
+    type Error = SolveError;
+
+    fn cost(&self) -> f64 {
+        self.current.cost
+    }
+
+    fn normal_equations(&self) -> &NormalEquations {
+        &self.current.equations
+    }
+
+    /// Draws the samples anew when [`AlignOptions::visibility_every`] iterations have run
+    /// since they were drawn; stalls with fewer than [`MIN_MATCHED`] matches.
+    fn prepare(&mut self) -> Result<Readiness, SolveError> {
+        if self.since_drawn == self.drawing.options.visibility_every {
+            self.samples = self.drawing.samples(&self.pose)?;
+            self.matches = self.matcher.associate(&self.samples, self.pose);
+            self.current = self.matcher.fit(&self.matches, self.pose, true);
+            self.since_drawn = 0;
+        }
+        if self.matches.len() < MIN_MATCHED {
+            return Ok(Readiness::Stalled);
+        }
+        self.since_drawn += 1;
+        Ok(Readiness::Ready)
+    }
+
+    /// No matched sample's projection moves by more than [`AlignOptions::tolerance_px`].
+    fn negligible(&self, step: &PoseStep) -> bool {
+        let next = self.pose.stepped(step);
+        self.matcher.largest_motion(&self.matches, self.pose, next)
+            <= self.drawing.options.tolerance_px
+    }
+
+    /// The cost of the current matches at the stepped pose.
+    fn try_step(&mut self, step: &PoseStep) -> f64 {
+        self.tried = self.pose.stepped(step);
+        self.matcher.fit(&self.matches, self.tried, false).cost
+    }
+
+    /// Moves to the pose tried and matches the samples anew there.
+    fn accept(&mut self) {
+        self.pose = self.tried;
+        self.matches = self.matcher.associate(&self.samples, self.pose);
+        self.current = self.matcher.fit(&self.matches, self.pose, true);
     }
 }
 
@@ -625,8 +673,8 @@ struct Fit {
     inliers: usize,
     /// `Σ r²` over the inliers, picture pixels squared.
     inlier_squares: f64,
-    hessian: Matrix6<f64>,
-    gradient: Vector6<f64>,
+    /// The normal equations of the cost (zero unless asked for).
+    equations: NormalEquations,
 }
 
 impl Matcher<'_> {
@@ -642,12 +690,12 @@ impl Matcher<'_> {
 
     /// The samples at `pose` that have an image edge near enough and running the same
     /// way, each with that edge.
-    fn associate(&self, samples: &[Sample], pose: Pose) -> Vec<Match> {
-        let rotation = DMat3::from_quat(pose.q);
+    fn associate(&self, samples: &[Sample], pose: PoseEstimate) -> Vec<Match> {
+        let rotation = DMat3::from_quat(pose.rotation);
         let level = self.level;
         let mut matches = Vec::with_capacity(samples.len());
         for sample in samples {
-            let p = rotation * sample.point + pose.t;
+            let p = rotation * sample.point + pose.translation;
             if p.z <= self.near {
                 continue;
             }
@@ -687,10 +735,16 @@ impl Matcher<'_> {
 
     /// The largest distance (level pixels) that a match's projection moves between `from`
     /// and `to`; infinite when one goes behind the near plane.
-    fn largest_motion(&self, matches: &[Match], from: Pose, to: Pose) -> f64 {
-        let (r0, r1) = (DMat3::from_quat(from.q), DMat3::from_quat(to.q));
+    fn largest_motion(&self, matches: &[Match], from: PoseEstimate, to: PoseEstimate) -> f64 {
+        let (r0, r1) = (
+            DMat3::from_quat(from.rotation),
+            DMat3::from_quat(to.rotation),
+        );
         matches.iter().fold(0.0, |largest, m| {
-            let (p0, p1) = (r0 * m.point + from.t, r1 * m.point + to.t);
+            let (p0, p1) = (
+                r0 * m.point + from.translation,
+                r1 * m.point + to.translation,
+            );
             if p0.z <= self.near || p1.z <= self.near {
                 return f64::INFINITY;
             }
@@ -699,20 +753,19 @@ impl Matcher<'_> {
     }
 
     /// The cost of `matches` at `pose`.
-    fn fit(&self, matches: &[Match], pose: Pose, with_normal_equations: bool) -> Fit {
-        let rotation = DMat3::from_quat(pose.q);
+    fn fit(&self, matches: &[Match], pose: PoseEstimate, with_normal_equations: bool) -> Fit {
+        let rotation = DMat3::from_quat(pose.rotation);
         let level = self.level;
         let behind = 0.5 * self.loss.eval(self.max_match * self.max_match).0;
         let mut fit = Fit {
             cost: 0.0,
             inliers: 0,
             inlier_squares: 0.0,
-            hessian: Matrix6::zeros(),
-            gradient: Vector6::zeros(),
+            equations: NormalEquations::zeros(),
         };
         for m in matches {
             let a = rotation * m.point;
-            let p = a + pose.t;
+            let p = a + pose.translation;
             if p.z <= self.near {
                 fit.cost += behind;
                 continue;
@@ -726,7 +779,7 @@ impl Matcher<'_> {
                 fit.inlier_squares += s / (level.scale * level.scale);
             }
             if with_normal_equations {
-                // ∂r/∂p, then J = ∂r/∂p·[−[a]× | I] (left update), as in refine_pose.
+                // ∂r/∂p, with a = R·X.
                 let inv_z = 1.0 / p.z;
                 let (nx, ny) = (m.normal.x * level.fx, m.normal.y * level.fy);
                 let row = DVec3::new(
@@ -734,10 +787,7 @@ impl Matcher<'_> {
                     ny * inv_z,
                     -(nx * p.x + ny * p.y) * inv_z * inv_z,
                 );
-                let w = a.cross(row);
-                let j = Vector6::new(w.x, w.y, w.z, row.x, row.y, row.z);
-                fit.hessian.syger(weight, &j, &j, 1.0);
-                fit.gradient.axpy(weight * residual, &j, 1.0);
+                fit.equations.add(a, row, residual, weight);
             }
         }
         fit

@@ -398,7 +398,7 @@ pub(super) fn orthonormalise(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
 mod tests {
     use super::*;
 
-    use crate::solve::testing::Rng;
+    use crate::vision::testing::Rng;
 
     /// The solution `x` of `a·x = b` for a symmetric positive definite `a` (its lower triangle
     /// and diagonal are read), by Cholesky factorisation; `None` when `a` is not positive

@@ -1,5 +1,6 @@
-//! The image side of image-based camera refinement: what an 8-bit picture says about
-//! where edges are.
+//! Image analysis: what an 8-bit picture says about where edges are. The alignment of a
+//! camera with a picture ([`align_to_image`](super::solve::align::align_to_image)) reads
+//! its edges here.
 //!
 //! * [`Luma`]: a grey-level picture, made from the samples a PNG decoder gives (1 to 4
 //!   channels), halved for a coarse-to-fine pyramid.
@@ -15,7 +16,7 @@
 //! The one well-kept Rust crate with Canny edges and distance transforms, `imageproc`,
 //! brings the `image` crate and a dozen more (fonts, random numbers, `num`, `itertools`)
 //! into the build for three short routines, and its distance transform returns distances
-//! but not the nearest edge pixel, which the refinement needs. The routines here are
+//! but not the nearest edge pixel, which the alignment needs. The routines here are
 //! small, and each is tested against a brute-force or analytic answer.
 
 mod distance;
