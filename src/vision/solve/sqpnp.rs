@@ -60,15 +60,16 @@
 //! not depend on the world's units or position; the pose and cost are given back in the
 //! caller's units.
 //!
-//! The 9-vectors and 9×9 matrices are nalgebra's stack-allocated `SVector` and `SMatrix`;
-//! the 9×9 eigen-decomposition, the 3×3 solves and the nearest rotation are the private
-//! `small` module's routines on plain arrays. Nothing is allocated per iteration, and a
-//! solve of a few hundred points takes some microseconds.
+//! The fixed-size algebra (the 9×9 eigen-decomposition, the 6×6 and 3×3 solves, the
+//! nearest rotation) is done on plain arrays by the private `small` module: no allocation
+//! per iteration, and a solve of a few hundred points takes some microseconds.
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
-use nalgebra::{SMatrix, SVector};
 
-use super::small::{MAX_QL_SWEEPS, nearest_rotation, orthonormalise, solve_spd3, symmetric_eigen};
+use super::small::{
+    MAX_QL_SWEEPS, Mat9, Vec9, axpy, distance_squared, dot, multiply, nearest_rotation,
+    orthonormalise, quadratic, scaled, solve_spd3, symmetric_eigen,
+};
 use super::{CvPose, Degeneracy, SolveError, check_pairs};
 
 /// The fewest correspondences [`sqpnp()`] accepts (with positive weight).
@@ -119,15 +120,6 @@ const COINCIDENT: f64 = 1e-12;
 /// Observations whose RMS distance from their mean is below this (normalised image units,
 /// about 1e-6 px at f = 1000 px) are one direction.
 const IMAGE_SPREAD_MIN: f64 = 1e-9;
-
-/// The nine entries of a 3×3 matrix, row by row.
-type Vec9 = SVector<f64, 9>;
-/// A 9×9 matrix.
-type Mat9 = SMatrix<f64, 9, 9>;
-/// Three 9-vectors, as columns.
-type Basis9 = SMatrix<f64, 9, 3>;
-/// `P` of `t = P·r`.
-type Mat3x9 = SMatrix<f64, 3, 9>;
 
 /// A symmetric 3×3 matrix by its six distinct entries, for accumulating sums of `w·x·xᵀ`.
 #[derive(Debug, Clone, Copy, Default)]
@@ -264,7 +256,7 @@ pub fn sqpnp(
 
     let frame = Normalisation::new(world, weights)?;
     let problem = Problem::new(world, observed, weights, frame)?;
-    let (values, vectors) = eigen(&problem.omega).ok_or(SolveError::DidNotConverge {
+    let (values, vectors) = symmetric_eigen(&problem.omega).ok_or(SolveError::DidNotConverge {
         iterations: MAX_QL_SWEEPS,
     })?;
     // Eigenvector k, scaled to the length of a rotation's entries.
@@ -288,10 +280,10 @@ pub fn sqpnp(
     for k in 0..starts {
         let e = start(k);
         if orthogonality_squared(&e) < ORTHOGONAL_SQUARED {
-            search.from(&(e * determinant(&e).signum()));
+            search.from(&scaled(&e, determinant(&e).signum()));
         } else {
             search.from(&e);
-            search.from(&-e);
+            search.from(&scaled(&e, -1.0));
         }
     }
     for (k, &value) in values.iter().enumerate().skip(starts) {
@@ -300,7 +292,7 @@ pub fn sqpnp(
         }
         let e = start(k);
         search.from(&e);
-        search.from(&-e);
+        search.from(&scaled(&e, -1.0));
     }
 
     let mut minima = search.minima;
@@ -384,10 +376,9 @@ impl Normalisation {
 /// `Ω` and `P` of one problem, in the normalised frame, and the correspondences they came
 /// from.
 struct Problem<'a> {
-    /// Exactly symmetric.
     omega: Mat9,
-    /// `t = P·r` (normalised frame).
-    p: Mat3x9,
+    /// `t = P·r` (normalised frame), as three rows.
+    p: [Vec9; 3],
     /// The world points, their weights (`None`: all one) and the normalised frame, for the
     /// cheirality test.
     world: &'a [DVec3],
@@ -452,7 +443,7 @@ impl<'a> Problem<'a> {
 
         // Σ Aᵢᵀ·Qᵢ·Aᵢ: 3×3 blocks (j, k) = Σ (Qᵢ)ⱼₖ·X·Xᵀ.
         let [x0, xu, xv, xq] = xx.map(Sym3::to_rows);
-        let mut omega = Mat9::zeros();
+        let mut omega = [[0.0; 9]; 9];
         for (j, k, block, sign) in [
             (0, 0, &x0, 1.0),
             (1, 1, &x0, 1.0),
@@ -464,31 +455,47 @@ impl<'a> Problem<'a> {
         ] {
             for a in 0..3 {
                 for b in 0..3 {
-                    omega[(3 * j + a, 3 * k + b)] = sign * block[a][b];
+                    omega[3 * j + a][3 * k + b] = sign * block[a][b];
                 }
             }
         }
         // Σ Qᵢ·Aᵢ: row j, block k = Σ (Qᵢ)ⱼₖ·Xᵀ.
         let [s0, su, sv, sq] = xs;
         let z = DVec3::ZERO;
-        let qa = Basis9::from_columns(&[stack(s0, z, -su), stack(z, s0, -sv), stack(-su, -sv, sq)])
-            .transpose();
+        let qa = [stack(s0, z, -su), stack(z, s0, -sv), stack(-su, -sv, sq)];
         let q_sum = [[q[0], 0.0, -q[1]], [0.0, q[0], -q[2]], [-q[1], -q[2], q[3]]];
         // t minimising Σ (Aᵢ·r + t)ᵀQᵢ(Aᵢ·r + t): t = −(ΣQᵢ)⁻¹·(ΣQᵢAᵢ)·r.
-        let mut q_inv = nalgebra::Matrix3::zeros();
+        let mut q_inv = [[0.0; 3]; 3];
         for (k, unit) in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
             .iter()
             .enumerate()
         {
             let column = solve_spd3(&q_sum, unit)
                 .ok_or(SolveError::Degenerate(Degeneracy::ParallelBearings))?;
-            q_inv.set_column(k, &column.into());
+            for (row, c) in q_inv.iter_mut().zip(column) {
+                row[k] = c;
+            }
         }
-        let p = -(q_inv * qa);
-        omega += qa.transpose() * p;
+        let p: [Vec9; 3] = std::array::from_fn(|j| {
+            std::array::from_fn(|c| -(0..3).map(|k| q_inv[j][k] * qa[k][c]).sum::<f64>())
+        });
+        for (i, row) in omega.iter_mut().enumerate() {
+            for (j, entry) in row.iter_mut().enumerate() {
+                *entry += (0..3).map(|k| qa[k][i] * p[k][j]).sum::<f64>();
+            }
+        }
         // Exactly symmetric: the mean of each entry and its mirror.
-        let omega = (omega + omega.transpose()) * 0.5;
-        if !omega.iter().all(|v| v.is_finite()) || !p.iter().all(|v| v.is_finite()) {
+        #[allow(clippy::needless_range_loop)] // two indices into one matrix
+        for i in 0..9 {
+            for j in 0..i {
+                let mean = 0.5 * (omega[i][j] + omega[j][i]);
+                omega[i][j] = mean;
+                omega[j][i] = mean;
+            }
+        }
+        if !omega.iter().flatten().all(|v| v.is_finite())
+            || !p.iter().flatten().all(|v| v.is_finite())
+        {
             return Err(SolveError::NonFinite {
                 what: "observations",
             });
@@ -503,13 +510,13 @@ impl<'a> Problem<'a> {
     }
 
     fn cost(&self, r: &Vec9) -> f64 {
-        r.dot(&(self.omega * r)).max(0.0)
+        quadratic(&self.omega, r).max(0.0)
     }
 
     /// `t = P·r` (normalised frame).
     fn translation(&self, r: &Vec9) -> DVec3 {
-        let t = self.p * r;
-        DVec3::new(t.x, t.y, t.z)
+        let [x, y, z] = self.p.map(|row| dot(&row, r));
+        DVec3::new(x, y, z)
     }
 
     /// The pose, cost and fit of a candidate in the caller's frame, or `None` when it does
@@ -601,7 +608,7 @@ impl Search<'_> {
         if let Some(same) = self
             .minima
             .iter_mut()
-            .find(|c| (c.r - r).norm_squared() < SAME_ROTATION_SQUARED)
+            .find(|c| distance_squared(&c.r, &r) < SAME_ROTATION_SQUARED)
         {
             if cost < same.cost {
                 *same = Candidate { r, cost, in_front };
@@ -634,19 +641,21 @@ fn run_sqp(omega: &Mat9, r0: Vec9, known: &[Candidate]) -> Option<Reached> {
         let Some(delta) = sqp_step(omega, &r) else {
             break;
         };
-        r += delta;
-        if delta.norm_squared() <= STEP_SQUARED_TOLERANCE {
+        for (x, d) in r.iter_mut().zip(&delta) {
+            *x += d;
+        }
+        if dot(&delta, &delta) <= STEP_SQUARED_TOLERANCE {
             break;
         }
         if known
             .iter()
-            .any(|c| (c.r - r).norm_squared() < KNOWN_MINIMUM_SQUARED)
+            .any(|c| distance_squared(&c.r, &r) < KNOWN_MINIMUM_SQUARED)
         {
             return Some(Reached::Known);
         }
     }
     if determinant(&r) < 0.0 {
-        r = -r;
+        r = scaled(&r, -1.0);
     }
     let rotation = orthonormalise(&rows(&r))?;
     Some(Reached::New(newton_polish(omega, rotation)))
@@ -713,11 +722,18 @@ fn sqp_step(omega: &Mat9, r: &Vec9) -> Option<Vec9> {
     // The rows of cof(R) are b×c, c×a, a×b.
     let d = tangent_basis([b.cross(c), c.cross(a), a.cross(b)]);
     let omega_d = omega_tangent(omega, &d);
-    let ahead = r + delta;
+    let mut ahead = *r;
+    for (x, dx) in ahead.iter_mut().zip(&delta) {
+        *x += dx;
+    }
     let w = gram(&d, &omega_d);
-    let rhs: [f64; 3] = (-omega_d.tr_mul(&ahead)).into();
+    let rhs = [0, 1, 2].map(|k| -dot(&omega_d[k], &ahead));
     let y = solve_spd3(&w, &rhs).or_else(|| least_squares_3(&w, &rhs))?;
-    delta.gemv(1.0, &d, &y.into(), 1.0);
+    for (k, dk) in d.iter().enumerate() {
+        for (x, dx) in delta.iter_mut().zip(dk) {
+            *x += y[k] * dx;
+        }
+    }
     delta.iter().all(|v| v.is_finite()).then_some(delta)
 }
 
@@ -734,8 +750,8 @@ fn sqp_step(omega: &Mat9, r: &Vec9) -> Option<Vec9> {
 fn newton_polish(omega: &Mat9, rotation: [[f64; 3]; 3]) -> Vec9 {
     let mut r = flatten(&rotation);
     // g = Ω·r, and the cost rᵀ·g.
-    let mut g = omega * r;
-    let mut cost = g.dot(&r);
+    let mut g = multiply(omega, &r);
+    let mut cost = dot(&g, &r);
     for _ in 0..MAX_NEWTON_STEPS {
         let d = tangent_basis(row_vectors(&r));
         let omega_d = omega_tangent(omega, &d);
@@ -751,7 +767,7 @@ fn newton_polish(omega: &Mat9, rotation: [[f64; 3]; 3]) -> Vec9 {
                 dtod[k][l] + 0.5 * (m[k][l] + m[l][k]) - if k == l { trace } else { 0.0 }
             })
         });
-        let gradient: [f64; 3] = (-d.tr_mul(&g)).into();
+        let gradient = d.map(|dk| -dot(&dk, &g));
         let Some(step) = solve_spd3(&hessian, &gradient) else {
             break;
         };
@@ -767,8 +783,8 @@ fn newton_polish(omega: &Mat9, rotation: [[f64; 3]; 3]) -> Vec9 {
             // cannot be checked: the step is taken on the Hessian's word, and is the last.
             return next;
         }
-        let next_g = omega * next;
-        let next_cost = next_g.dot(&next);
+        let next_g = multiply(omega, &next);
+        let next_cost = dot(&next_g, &next);
         if next_cost.is_nan() || next_cost > cost {
             break;
         }
@@ -779,28 +795,25 @@ fn newton_polish(omega: &Mat9, rotation: [[f64; 3]; 3]) -> Vec9 {
 
 /// The columns `[eₖ]×·C` (k = 0, 1, 2) for the 3×3 matrix `C` with rows `c`, as entries row
 /// by row: `(0, −c₂, c₁)`, `(c₂, 0, −c₀)`, `(−c₁, c₀, 0)`.
-fn tangent_basis(c: [DVec3; 3]) -> Basis9 {
+fn tangent_basis(c: [DVec3; 3]) -> [Vec9; 3] {
     let z = DVec3::ZERO;
-    Basis9::from_columns(&[
+    [
         stack(z, -c[2], c[1]),
         stack(c[2], z, -c[0]),
         stack(-c[1], c[0], z),
-    ])
+    ]
 }
 
-/// `Ω·D` for the columns `d` of [`tangent_basis`]. Column `k` is zero in its block `k`, so
-/// the products take two thirds of the work of a full one.
-fn omega_tangent(omega: &Mat9, d: &Basis9) -> Basis9 {
-    let mut out = Basis9::zeros();
-    for k in 0..3 {
-        let mut column = out.column_mut(k);
-        for block in (0..3).filter(|&b| b != k) {
-            column.gemv(
-                1.0,
-                &omega.fixed_columns::<3>(3 * block),
-                &d.fixed_view::<3, 1>(3 * block, k),
-                1.0,
-            );
+/// `Ω·dₖ` for the three columns `d` of [`tangent_basis`], as [`multiply`] would give
+/// them. Column `k` is zero in its block `k`, so the products take two thirds of the work
+/// of three full ones.
+fn omega_tangent(omega: &Mat9, d: &[Vec9; 3]) -> [Vec9; 3] {
+    let mut out = [[0.0; 9]; 3];
+    for (k, (o, dk)) in out.iter_mut().zip(d).enumerate() {
+        for (j, (row, &s)) in omega.iter().zip(dk).enumerate() {
+            if j / 3 != k {
+                axpy(o, s, row);
+            }
         }
     }
     out
@@ -825,34 +838,28 @@ fn least_squares_3(w: &[[f64; 3]; 3], rhs: &[f64; 3]) -> Option<[f64; 3]> {
     Some(y)
 }
 
-/// `Dᵀ·(Ω·D)` for D and Ω·D (symmetric: six products).
-fn gram(d: &Basis9, omega_d: &Basis9) -> [[f64; 3]; 3] {
-    let entry = |k: usize, l: usize| d.column(k).dot(&omega_d.column(l));
-    let (a, b, c) = (entry(0, 1), entry(0, 2), entry(1, 2));
+/// `Dᵀ·(Ω·D)` for the columns `d` of D and `omega_d` of Ω·D (symmetric: six products).
+fn gram(d: &[Vec9; 3], omega_d: &[Vec9; 3]) -> [[f64; 3]; 3] {
+    let (a, b, c) = (
+        dot(&d[0], &omega_d[1]),
+        dot(&d[0], &omega_d[2]),
+        dot(&d[1], &omega_d[2]),
+    );
     [
-        [entry(0, 0), a, b],
-        [a, entry(1, 1), c],
-        [b, c, entry(2, 2)],
+        [dot(&d[0], &omega_d[0]), a, b],
+        [a, dot(&d[1], &omega_d[1]), c],
+        [b, c, dot(&d[2], &omega_d[2])],
     ]
-}
-
-/// The eigen-decomposition of the symmetric `Ω`: its eigenvalues in ascending order and
-/// the matching orthonormal eigenvectors; `None` as for [`symmetric_eigen`].
-fn eigen(omega: &Mat9) -> Option<([f64; 9], [Vec9; 9])> {
-    // Ω is exactly symmetric, so its columns (nalgebra's storage) are its rows.
-    let rows: [[f64; 9]; 9] = (*omega).into();
-    let (values, vectors) = symmetric_eigen(&rows)?;
-    Some((values, vectors.map(Vec9::from)))
 }
 
 /// The nine entries of the matrix with rows `a`, `b`, `c`, row by row.
 fn stack(a: DVec3, b: DVec3, c: DVec3) -> Vec9 {
-    Vec9::from([a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z])
+    [a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z]
 }
 
 /// The entries of the matrix with rows `m`, row by row.
 fn flatten(m: &[[f64; 3]; 3]) -> Vec9 {
-    Vec9::from_fn(|k, _| m[k / 3][k % 3])
+    std::array::from_fn(|k| m[k / 3][k % 3])
 }
 
 /// The rows of the matrix with entries `r` row by row.
@@ -1103,11 +1110,11 @@ mod tests {
             let (_, world, observed) = scene(&mut rng, 30, 2.0);
             let frame = Normalisation::new(&world, None).unwrap();
             let problem = Problem::new(&world, &observed, None, frame).unwrap();
-            let (values, vectors) = eigen(&problem.omega).unwrap();
+            let (values, vectors) = symmetric_eigen(&problem.omega).unwrap();
             let e = vectors[0].map(|x| x * 3f64.sqrt());
             // Of the two starts, the run that reaches the lower cost (a run from the other
             // may stop at its step limit far from any minimum).
-            let r = [e, -e]
+            let r = [e, scaled(&e, -1.0)]
                 .map(|start| {
                     let r0 = flatten(&nearest_rotation(&rows(&start)).unwrap());
                     match run_sqp(&problem.omega, r0, &[]).unwrap() {
@@ -1121,8 +1128,8 @@ mod tests {
             {
                 assert!(orthogonality_squared(&r) < 1e-28, "trial {trial}");
                 // ½∇f in ω: Dᵀ·Ω·r with Dₖ = [eₖ]×·R.
-                let g = problem.omega * r;
-                let gradient = tangent_basis(row_vectors(&r)).tr_mul(&g);
+                let g = multiply(&problem.omega, &r);
+                let gradient = tangent_basis(row_vectors(&r)).map(|d| dot(&d, &g));
                 let size = gradient.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
                 assert!(
                     size < 1e-12 * values[8],
@@ -1147,7 +1154,7 @@ mod tests {
             let (_, world, observed) = scene(&mut rng, n, 2.0);
             let frame = Normalisation::new(&world, None).unwrap();
             let problem = Problem::new(&world, &observed, None, frame).unwrap();
-            let (values, vectors) = eigen(&problem.omega).unwrap();
+            let (values, vectors) = symmetric_eigen(&problem.omega).unwrap();
             let starts: Vec<Vec9> = vectors
                 .iter()
                 .flat_map(|v| [1.0, -1.0].map(|s| v.map(|x| x * s * 3f64.sqrt())))
@@ -1173,13 +1180,13 @@ mod tests {
                 }
                 search.from(&r0);
             }
-            let close = |a: &Vec9, b: &Vec9| (a - b).norm_squared() < 1e-12;
+            let close = |a: &Vec9, b: &Vec9| distance_squared(a, b) < 1e-12;
             for m in &search.minima {
                 assert!(oracle.iter().any(|o| close(o, &m.r)), "trial {trial}");
             }
             let stationary = |r: &Vec9| {
-                let g = problem.omega * r;
-                let gradient = tangent_basis(row_vectors(r)).tr_mul(&g);
+                let g = multiply(&problem.omega, r);
+                let gradient = tangent_basis(row_vectors(r)).map(|d| dot(&d, &g));
                 gradient.iter().all(|x| x.abs() < 1e-10 * values[8])
             };
             for o in oracle.iter().filter(|o| stationary(o)) {
