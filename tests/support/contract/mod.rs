@@ -1,5 +1,6 @@
-//! Helpers of `tests/contract.rs`: a JSON Schema validator for the subset the contract
-//! uses, a reader of the router's routes, and a real server with an HTTP client.
+//! Helpers of `tests/contract.rs`: the contract's schemas checked with the `jsonschema`
+//! crate plus the project's own rules, a reader of the router's routes, and a real
+//! server with an HTTP client.
 
 pub mod routes;
 pub mod schema;

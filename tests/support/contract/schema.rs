@@ -1,62 +1,84 @@
-//! A validator for the subset of JSON Schema 2020-12 that `proto/openapi.yaml` uses.
+//! The contract's schemas, checked with the `jsonschema` crate (JSON Schema 2020-12).
 //!
-//! Implemented: `$ref` (local `#/...` pointers), `type` (one or several), `enum`,
-//! `const`, `properties`, `required`, `additionalProperties`, `items`, `minItems`,
-//! `maxItems`, `minimum`, `maximum`, `exclusiveMinimum`, `exclusiveMaximum`,
-//! `minLength`, `maxLength`, `pattern`, `allOf`, `anyOf`, `oneOf`, `not`, and OpenAPI's
-//! `discriminator` (used to pick the branch whose errors are reported, and checked for
-//! consistency with its `oneOf`). Annotations (`description`, `default`, ...) are
-//! ignored. Any other keyword is an error, so that the contract cannot quietly use a
-//! keyword this validator would skip.
+//! A schema of `proto/openapi.yaml` is compiled with the document's `components` beside
+//! it, so that its `#/components/...` references resolve; nothing is fetched. `format`
+//! is asserted for the formats the crate knows (OpenAPI's `binary` only annotates).
 //!
-//! One deliberate difference from the standard: `integer` means a JSON number written
-//! without a fraction or exponent (`3`, not `3.0`), because ids must be JSON integers.
+//! The project's own rules, which JSON Schema does not express:
+//!
+//! - `integer` means a JSON number written without a fraction or exponent (`3`, not
+//!   `3.0`), because ids must be JSON integers; the standard counts `3.0` as an integer.
+//!   The `type` keyword is the crate's check plus this rule.
+//! - A schema uses only keywords the crate asserts, and annotations: OpenAPI 3.0's
+//!   `nullable`, a misspelt keyword or `contentSchema` would otherwise be skipped without
+//!   a word.
+//! - Every name in `required` is one of the object's `properties`; an `enum` lists at
+//!   least one value.
+//! - OpenAPI's `discriminator` sits beside a `oneOf` of references and maps exactly
+//!   those; each mapped schema requires the property and fixes it with `const`, so that
+//!   the `oneOf` alone decides what the discriminator says. When no branch matches, the
+//!   errors reported are those of the branch the discriminator names.
 
+use jsonschema::error::ValidationErrorKind;
+use jsonschema::paths::Location;
+use jsonschema::{Keyword, ValidationError};
 use serde_json::{Map, Value};
 
-/// Keywords that constrain instances and are implemented here.
-const ASSERTIONS: &[&str] = &[
+/// Keywords whose value is one schema.
+const SUBSCHEMA: &[&str] = &[
+    "additionalProperties",
+    "items",
+    "not",
+    "contains",
+    "propertyNames",
+    "if",
+    "then",
+    "else",
+    "unevaluatedItems",
+    "unevaluatedProperties",
+];
+
+/// Keywords whose value maps names to schemas.
+const SUBSCHEMA_MAP: &[&str] = &["properties", "patternProperties", "dependentSchemas"];
+
+/// Keywords whose value is a list of schemas.
+const SUBSCHEMA_LIST: &[&str] = &["allOf", "anyOf", "oneOf", "prefixItems"];
+
+/// The other keywords a schema may use: assertions and annotations.
+const KEYWORDS: &[&str] = &[
     "$ref",
     "type",
     "enum",
     "const",
-    "properties",
     "required",
-    "additionalProperties",
-    "items",
+    "dependentRequired",
+    "minProperties",
+    "maxProperties",
     "minItems",
     "maxItems",
+    "uniqueItems",
+    "minContains",
+    "maxContains",
     "minimum",
     "maximum",
     "exclusiveMinimum",
     "exclusiveMaximum",
+    "multipleOf",
     "minLength",
     "maxLength",
     "pattern",
-    "allOf",
-    "anyOf",
-    "oneOf",
-    "not",
+    "format",
     "discriminator",
-];
-
-/// Keywords that only annotate.
-const ANNOTATIONS: &[&str] = &[
     "description",
     "title",
     "default",
     "examples",
     "example",
-    "format",
     "deprecated",
     "readOnly",
     "writeOnly",
     "$comment",
     "externalDocs",
-];
-
-const TYPES: &[&str] = &[
-    "null", "boolean", "object", "array", "number", "integer", "string",
 ];
 
 /// Validates instances against schemas of one document (whose `$ref`s it resolves).
@@ -91,10 +113,34 @@ impl<'a> Validator<'a> {
         Err("reference chain too long".into())
     }
 
-    /// Every way `instance` fails `schema`; empty if it conforms.
+    /// `schema` with the document's components beside it, and its validator.
+    fn compile(&self, schema: &Value) -> Result<(Value, jsonschema::Validator), String> {
+        let mut root = schema.clone();
+        if let (Value::Object(r), Some(c)) = (&mut root, self.doc.get("components")) {
+            r.insert("components".into(), c.clone());
+        }
+        let validator = jsonschema::draft202012::options()
+            .offline()
+            .should_validate_formats(true)
+            .with_keyword("type", type_keyword)
+            .build(&root)
+            .map_err(|e| format!("{}: {e}", at_or_root(e.instance_path())))?;
+        Ok((root, validator))
+    }
+
+    /// Every way `instance` fails `schema` (or `schema` breaks the rules above); empty if
+    /// it conforms.
     pub fn errors(&self, schema: &Value, instance: &Value) -> Vec<String> {
         let mut errs = Vec::new();
-        self.check(schema, instance, "", &mut errs, 0);
+        self.lint(schema, "schema", &mut errs, 0);
+        match self.compile(schema) {
+            Ok((root, validator)) => {
+                for e in validator.iter_errors(instance) {
+                    report(&root, &e, "", &mut errs);
+                }
+            }
+            Err(e) => errs.push(format!("schema: {e}")),
+        }
         errs
     }
 
@@ -108,347 +154,60 @@ impl<'a> Validator<'a> {
         }
     }
 
-    fn check(&self, schema: &Value, v: &Value, at: &str, errs: &mut Vec<String>, depth: usize) {
-        if depth > 64 {
-            errs.push(format!("{at}: schema nesting too deep (a $ref cycle?)"));
-            return;
-        }
-        let s = match schema {
-            Value::Bool(true) => return,
-            Value::Bool(false) => {
-                errs.push(format!("{at}: no value is allowed here"));
-                return;
-            }
-            Value::Object(s) => s,
-            other => {
-                errs.push(format!("{at}: a schema must be an object, not {other}"));
-                return;
-            }
-        };
-        for key in s.keys() {
-            if !ASSERTIONS.contains(&key.as_str()) && !ANNOTATIONS.contains(&key.as_str()) {
-                errs.push(format!("{at}: schema keyword {key:?} is not supported"));
-            }
-        }
-        let at_or_root = if at.is_empty() { "/" } else { at };
-        if let Some(r) = s.get("$ref") {
-            match r.as_str().map(|r| self.resolve(r)) {
-                Some(Ok(target)) => self.check(target, v, at, errs, depth + 1),
-                Some(Err(e)) => errs.push(format!("{at_or_root}: {e}")),
-                None => errs.push(format!("{at_or_root}: $ref must be a string")),
-            }
-        }
-        if let Some(t) = s.get("type") {
-            let names: Vec<&str> = match t {
-                Value::String(n) => vec![n.as_str()],
-                Value::Array(a) => a.iter().filter_map(Value::as_str).collect(),
-                _ => vec![],
-            };
-            if !names.iter().any(|n| is_type(v, n)) {
-                errs.push(format!(
-                    "{at_or_root}: expected {}, found {}",
-                    names.join(" or "),
-                    kind(v)
-                ));
-                // Further checks would only repeat the type error.
-                return;
-            }
-        }
-        if let Some(c) = s.get("const")
-            && !json_eq(c, v)
-        {
-            errs.push(format!("{at_or_root}: expected {c}, found {v}"));
-        }
-        if let Some(Value::Array(options)) = s.get("enum")
-            && !options.iter().any(|o| json_eq(o, v))
-        {
-            errs.push(format!(
-                "{at_or_root}: {v} is not one of {}",
-                Value::Array(options.clone())
-            ));
-        }
-        if let Some(n) = v.as_f64() {
-            let bound = |k: &str| s.get(k).and_then(Value::as_f64);
-            if let Some(m) = bound("minimum")
-                && n < m
-            {
-                errs.push(format!("{at_or_root}: {v} is below the minimum {m}"));
-            }
-            if let Some(m) = bound("maximum")
-                && n > m
-            {
-                errs.push(format!("{at_or_root}: {v} is above the maximum {m}"));
-            }
-            if let Some(m) = bound("exclusiveMinimum")
-                && n <= m
-            {
-                errs.push(format!("{at_or_root}: {v} is not above {m}"));
-            }
-            if let Some(m) = bound("exclusiveMaximum")
-                && n >= m
-            {
-                errs.push(format!("{at_or_root}: {v} is not below {m}"));
-            }
-        }
-        if let Value::String(text) = v {
-            let len = text.chars().count() as u64;
-            if let Some(m) = s.get("minLength").and_then(Value::as_u64)
-                && len < m
-            {
-                errs.push(format!("{at_or_root}: {v} is shorter than {m} characters"));
-            }
-            if let Some(m) = s.get("maxLength").and_then(Value::as_u64)
-                && len > m
-            {
-                errs.push(format!("{at_or_root}: {v} is longer than {m} characters"));
-            }
-            if let Some(p) = s.get("pattern").and_then(Value::as_str) {
-                match regex::Regex::new(p) {
-                    Ok(re) if re.is_match(text) => {}
-                    Ok(_) => errs.push(format!("{at_or_root}: {v} does not match {p:?}")),
-                    Err(e) => errs.push(format!("{at_or_root}: pattern {p:?}: {e}")),
-                }
-            }
-        }
-        if let Value::Array(items) = v {
-            let n = items.len() as u64;
-            if let Some(m) = s.get("minItems").and_then(Value::as_u64)
-                && n < m
-            {
-                errs.push(format!("{at_or_root}: {n} items, fewer than {m}"));
-            }
-            if let Some(m) = s.get("maxItems").and_then(Value::as_u64)
-                && n > m
-            {
-                errs.push(format!("{at_or_root}: {n} items, more than {m}"));
-            }
-            if let Some(item) = s.get("items") {
-                for (i, x) in items.iter().enumerate() {
-                    self.check(item, x, &format!("{at}/{i}"), errs, depth + 1);
-                }
-            }
-        }
-        if let Value::Object(obj) = v {
-            self.check_object(s, obj, at, errs, depth);
-        }
-        if let Some(Value::Array(all)) = s.get("allOf") {
-            for sub in all {
-                self.check(sub, v, at, errs, depth + 1);
-            }
-        }
-        if let Some(Value::Array(any)) = s.get("anyOf")
-            && !any
-                .iter()
-                .any(|sub| self.errors_at(sub, v, at, depth).is_empty())
-        {
-            errs.push(format!("{at_or_root}: matches none of anyOf"));
-        }
-        if let Some(Value::Array(one)) = s.get("oneOf") {
-            self.check_one_of(s, one, v, at, errs, depth);
-        }
-        if let Some(not) = s.get("not")
-            && self.errors_at(not, v, at, depth).is_empty()
-        {
-            errs.push(format!("{at_or_root}: matches a schema it must not match"));
-        }
-    }
-
-    fn errors_at(&self, schema: &Value, v: &Value, at: &str, depth: usize) -> Vec<String> {
-        let mut errs = Vec::new();
-        self.check(schema, v, at, &mut errs, depth + 1);
-        errs
-    }
-
-    fn check_object(
-        &self,
-        s: &Map<String, Value>,
-        obj: &Map<String, Value>,
-        at: &str,
-        errs: &mut Vec<String>,
-        depth: usize,
-    ) {
-        let at_or_root = if at.is_empty() { "/" } else { at };
-        if let Some(Value::Array(required)) = s.get("required") {
-            for r in required.iter().filter_map(Value::as_str) {
-                if !obj.contains_key(r) {
-                    errs.push(format!("{at_or_root}: missing required property {r:?}"));
-                }
-            }
-        }
-        let props = s.get("properties").and_then(Value::as_object);
-        for (k, x) in obj {
-            let here = format!("{at}/{}", k.replace('~', "~0").replace('/', "~1"));
-            match props.and_then(|p| p.get(k)) {
-                Some(sub) => self.check(sub, x, &here, errs, depth + 1),
-                None => match s.get("additionalProperties") {
-                    Some(Value::Bool(false)) => {
-                        errs.push(format!("{at_or_root}: property {k:?} is not allowed"));
-                    }
-                    Some(sub @ Value::Object(_)) => self.check(sub, x, &here, errs, depth + 1),
-                    _ => {}
-                },
-            }
-        }
-    }
-
-    fn check_one_of(
-        &self,
-        s: &Map<String, Value>,
-        one: &[Value],
-        v: &Value,
-        at: &str,
-        errs: &mut Vec<String>,
-        depth: usize,
-    ) {
-        let at_or_root = if at.is_empty() { "/" } else { at };
-        let results: Vec<Vec<String>> = one
-            .iter()
-            .map(|sub| self.errors_at(sub, v, at, depth))
-            .collect();
-        let passing = results.iter().filter(|e| e.is_empty()).count();
-        if passing == 1 {
-            return;
-        }
-        if passing > 1 {
-            errs.push(format!(
-                "{at_or_root}: matches {passing} branches of oneOf, not exactly one"
-            ));
-            return;
-        }
-        // No branch matches: report the branch the discriminator names, if any, so that
-        // the message says what is wrong with it rather than with every branch.
-        if let Some(d) = s.get("discriminator") {
-            let prop = d.get("propertyName").and_then(Value::as_str).unwrap_or("");
-            match v.get(prop).and_then(Value::as_str) {
-                None => errs.push(format!(
-                    "{at_or_root}: missing discriminator property {prop:?}"
-                )),
-                Some(tag) => {
-                    let target = d
-                        .get("mapping")
-                        .and_then(|m| m.get(tag))
-                        .and_then(Value::as_str);
-                    match target.and_then(|t| one.iter().position(|b| ref_of(b) == Some(t))) {
-                        Some(i) => errs.extend(results[i].iter().cloned()),
-                        None => errs.push(format!(
-                            "{at_or_root}: {prop} {tag:?} is none of the mapped variants"
-                        )),
-                    }
-                }
-            }
-            return;
-        }
-        errs.push(format!("{at_or_root}: matches no branch of oneOf"));
-        for (i, e) in results.iter().enumerate() {
-            for line in e {
-                errs.push(format!("  (oneOf branch {i}) {line}"));
-            }
-        }
-    }
-
-    /// Problems with a schema itself: unsupported keywords, unresolved references,
-    /// malformed keyword values, and discriminators inconsistent with their `oneOf`.
+    /// Problems with a schema itself: what the crate refuses to compile (malformed
+    /// keyword values, unresolved references, bad patterns) and the rules above.
     pub fn schema_problems(&self, schema: &Value, at: &str) -> Vec<String> {
         let mut out = Vec::new();
+        if let Err(e) = self.compile(schema) {
+            out.push(format!("{at}: {e}"));
+        }
         self.lint(schema, at, &mut out, 0);
         out
     }
 
     fn lint(&self, schema: &Value, at: &str, out: &mut Vec<String>, depth: usize) {
+        let Value::Object(s) = schema else { return };
         if depth > 64 {
             return;
         }
-        let s = match schema {
-            Value::Bool(_) => return,
-            Value::Object(s) => s,
-            _ => {
-                out.push(format!("{at}: a schema must be an object or a boolean"));
-                return;
-            }
-        };
         for (key, val) in s {
             let here = format!("{at}/{key}");
-            match key.as_str() {
-                "$ref" => match val.as_str() {
-                    Some(r) => {
-                        if let Err(e) = self.resolve(r) {
-                            out.push(format!("{here}: {e}"));
-                        }
-                    }
-                    None => out.push(format!("{here}: must be a string")),
-                },
-                "type" => {
-                    let ok = match val {
-                        Value::String(t) => TYPES.contains(&t.as_str()),
-                        Value::Array(a) => a
-                            .iter()
-                            .all(|t| t.as_str().is_some_and(|t| TYPES.contains(&t))),
-                        _ => false,
-                    };
-                    if !ok {
-                        out.push(format!("{here}: unknown type {val}"));
-                    }
+            let k = key.as_str();
+            if SUBSCHEMA.contains(&k) {
+                self.lint(val, &here, out, depth + 1);
+            } else if SUBSCHEMA_MAP.contains(&k) {
+                for (name, sub) in val.as_object().into_iter().flatten() {
+                    self.lint(sub, &format!("{here}/{name}"), out, depth + 1);
                 }
-                "properties" => match val.as_object() {
-                    Some(p) => {
-                        for (name, sub) in p {
-                            self.lint(sub, &format!("{here}/{name}"), out, depth + 1);
-                        }
-                    }
-                    None => out.push(format!("{here}: must be an object")),
-                },
-                "required" => {
-                    let props = s.get("properties").and_then(Value::as_object);
-                    match val.as_array() {
-                        Some(r) => {
-                            for name in r {
-                                match name.as_str() {
-                                    Some(n) if props.is_some_and(|p| !p.contains_key(n)) => out
-                                        .push(format!("{here}: {n:?} is required but not defined")),
-                                    Some(_) => {}
-                                    None => out.push(format!("{here}: names must be strings")),
-                                }
-                            }
-                        }
-                        None => out.push(format!("{here}: must be an array")),
-                    }
+            } else if SUBSCHEMA_LIST.contains(&k) {
+                for (i, sub) in val.as_array().into_iter().flatten().enumerate() {
+                    self.lint(sub, &format!("{here}/{i}"), out, depth + 1);
                 }
-                "additionalProperties" | "items" | "not" => {
-                    self.lint(val, &here, out, depth + 1);
-                }
-                "allOf" | "anyOf" | "oneOf" => match val.as_array() {
-                    Some(a) if !a.is_empty() => {
-                        for (i, sub) in a.iter().enumerate() {
-                            self.lint(sub, &format!("{here}/{i}"), out, depth + 1);
-                        }
-                    }
-                    _ => out.push(format!("{here}: must be a non-empty array")),
-                },
-                "enum" => {
-                    if val.as_array().is_none_or(|a| a.is_empty()) {
-                        out.push(format!("{here}: must be a non-empty array"));
-                    }
-                }
-                "minItems" | "maxItems" | "minLength" | "maxLength" => {
-                    if !val.is_u64() {
-                        out.push(format!("{here}: must be a non-negative integer"));
-                    }
-                }
-                "minimum" | "maximum" | "exclusiveMinimum" | "exclusiveMaximum" => {
-                    if !val.is_number() {
-                        out.push(format!("{here}: must be a number"));
-                    }
-                }
-                "discriminator" => self.lint_discriminator(s, val, &here, out),
-                "pattern" => match val.as_str().map(regex::Regex::new) {
-                    Some(Ok(_)) => {}
-                    Some(Err(e)) => out.push(format!("{here}: {e}")),
-                    None => out.push(format!("{here}: must be a string")),
-                },
-                "const" => {}
-                k if ANNOTATIONS.contains(&k) => {}
-                k => out.push(format!("{here}: schema keyword {k:?} is not supported")),
+            } else if !KEYWORDS.contains(&k) {
+                out.push(format!("{here}: schema keyword {k:?} is not supported"));
             }
+        }
+        let props = s.get("properties").and_then(Value::as_object);
+        for name in s
+            .get("required")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
+            if let (Some(n), Some(p)) = (name.as_str(), props)
+                && !p.contains_key(n)
+            {
+                out.push(format!("{at}/required: {n:?} is required but not defined"));
+            }
+        }
+        if s.get("enum")
+            .and_then(Value::as_array)
+            .is_some_and(Vec::is_empty)
+        {
+            out.push(format!("{at}/enum: must list at least one value"));
+        }
+        if let Some(d) = s.get("discriminator") {
+            self.lint_discriminator(s, d, &format!("{at}/discriminator"), out);
         }
     }
 
@@ -514,55 +273,123 @@ impl<'a> Validator<'a> {
     }
 }
 
+/// An error as `path: message`. A `oneOf` or `anyOf` that nothing matches lists the
+/// errors of its branches, or only those of the branch its discriminator names.
+fn report(root: &Value, e: &ValidationError, indent: &str, out: &mut Vec<String>) {
+    let at = at_or_root(e.instance_path());
+    let (word, branches) = match e.kind() {
+        ValidationErrorKind::OneOfNotValid { context } => ("oneOf", context),
+        ValidationErrorKind::AnyOf { context } => ("anyOf", context),
+        ValidationErrorKind::OneOfMultipleValid { .. } => {
+            out.push(format!(
+                "{indent}{at}: matches more than one branch of oneOf"
+            ));
+            return;
+        }
+        _ => {
+            out.push(format!("{indent}{at}: {}", brief(&e.to_string())));
+            return;
+        }
+    };
+    // The schema holding the keyword, in `root` (every reference points into it).
+    let schema_at = e.schema_path().as_str();
+    let holder = schema_at
+        .strip_suffix(&format!("/{word}"))
+        .and_then(|p| root.pointer(p));
+    if let Some(d) = holder.and_then(|h| h.get("discriminator")) {
+        let prop = d["propertyName"].as_str().unwrap_or("");
+        let Some(tag) = e.instance().get(prop).and_then(Value::as_str) else {
+            out.push(format!(
+                "{indent}{at}: missing discriminator property {prop:?}"
+            ));
+            return;
+        };
+        let branch = d["mapping"][tag].as_str().and_then(|t| {
+            let one = holder?[word].as_array()?;
+            one.iter().position(|b| ref_of(b) == Some(t))
+        });
+        match branch.and_then(|i| branches.get(i)) {
+            Some(errs) => errs.iter().for_each(|e| report(root, e, indent, out)),
+            None => out.push(format!(
+                "{indent}{at}: {prop} {tag:?} is none of the mapped variants"
+            )),
+        }
+        return;
+    }
+    out.push(format!("{indent}{at}: matches no branch of {word}"));
+    for (i, errs) in branches.iter().enumerate() {
+        let inner = format!("{indent}  ({word} branch {i}) ");
+        errs.iter().for_each(|e| report(root, e, &inner, out));
+    }
+}
+
+fn at_or_root(path: &Location) -> &str {
+    match path.as_str() {
+        "" => "/",
+        p => p,
+    }
+}
+
+/// A message cut to a readable length (messages quote the instance, which may be large).
+fn brief(message: &str) -> String {
+    const MAX: usize = 400;
+    match message.char_indices().nth(MAX) {
+        Some((i, _)) => format!("{}…", &message[..i]),
+        None => message.to_string(),
+    }
+}
+
 fn ref_of(v: &Value) -> Option<&str> {
     v.get("$ref").and_then(Value::as_str)
 }
 
-fn is_type(v: &Value, name: &str) -> bool {
-    match name {
-        "null" => v.is_null(),
-        "boolean" => v.is_boolean(),
-        "object" => v.is_object(),
-        "array" => v.is_array(),
-        "number" => v.is_number(),
-        "integer" => v.is_i64() || v.is_u64(),
-        "string" => v.is_string(),
-        _ => false,
+/// `type` as the crate checks it, except that a number written with a fraction or an
+/// exponent is no `integer`.
+struct Type {
+    standard: jsonschema::Validator,
+    /// `integer` is allowed and `number` is not.
+    integer_only: bool,
+}
+
+impl Type {
+    fn fraction_written(&self, v: &Value) -> bool {
+        self.integer_only && v.is_f64()
     }
 }
 
-fn kind(v: &Value) -> String {
-    match v {
-        Value::Null => "null".into(),
-        Value::Bool(_) => "a boolean".into(),
-        Value::Number(n) if n.is_f64() => format!("the number {n}"),
-        Value::Number(n) => format!("the integer {n}"),
-        Value::String(s) => format!("the string {s:?}"),
-        Value::Array(_) => "an array".into(),
-        Value::Object(_) => "an object".into(),
+impl<'i> Keyword<'i> for Type {
+    fn validate(&self, instance: &'i Value) -> Result<(), ValidationError<'i>> {
+        self.standard.validate(instance)?;
+        if self.fraction_written(instance) {
+            return Err(ValidationError::custom(format!(
+                "{instance} is not of type \"integer\" (written with a fraction or exponent)"
+            )));
+        }
+        Ok(())
+    }
+
+    fn is_valid(&self, instance: &'i Value) -> bool {
+        self.standard.is_valid(instance) && !self.fraction_written(instance)
     }
 }
 
-/// JSON equality with numbers compared by value (`1` equals `1.0`).
-fn json_eq(a: &Value, b: &Value) -> bool {
-    match (a, b) {
-        (Value::Number(x), Value::Number(y)) => match (x.as_i64(), y.as_i64()) {
-            (Some(x), Some(y)) => x == y,
-            _ => match (x.as_u64(), y.as_u64()) {
-                (Some(x), Some(y)) => x == y,
-                _ => x.as_f64() == y.as_f64(),
-            },
-        },
-        (Value::Array(x), Value::Array(y)) => {
-            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| json_eq(p, q))
-        }
-        (Value::Object(x), Value::Object(y)) => {
-            x.len() == y.len()
-                && x.iter()
-                    .all(|(k, p)| y.get(k).is_some_and(|q| json_eq(p, q)))
-        }
-        _ => a == b,
-    }
+fn type_keyword<'a>(
+    _: &'a Map<String, Value>,
+    value: &'a Value,
+    _: Location,
+) -> Result<Box<dyn for<'i> Keyword<'i>>, ValidationError<'a>> {
+    let standard = jsonschema::draft202012::new(&serde_json::json!({ "type": value }))
+        .map_err(|e| ValidationError::schema(e.to_string()))?;
+    let names: Vec<&str> = match value {
+        Value::String(n) => vec![n.as_str()],
+        Value::Array(a) => a.iter().filter_map(Value::as_str).collect(),
+        _ => vec![],
+    };
+    let integer_only = names.contains(&"integer") && !names.contains(&"number");
+    Ok(Box::new(Type {
+        standard,
+        integer_only,
+    }))
 }
 
 #[cfg(test)]
@@ -592,7 +419,9 @@ mod tests {
                               "ball": "#/components/schemas/Ball"}}},
                 "Named": {"type": "object", "required": ["name"],
                           "properties": {"name": {"oneOf": [
-                              {"type": "string", "minLength": 1}, {"type": "null"}]}}}
+                              {"type": "string", "minLength": 1}, {"type": "null"}]}}},
+                "Colour": {"type": "string", "pattern": "^#[0-9a-f]{6}$"},
+                "Name": {"type": "string", "pattern": "^[^\\s\\x00-\\x1f\\u200b-\\u200f]+$"}
             }}
         })
     }
@@ -606,9 +435,15 @@ mod tests {
     #[test]
     fn integers_are_written_without_a_fraction() {
         assert!(check("Id", json!(3)).is_empty());
-        assert_eq!(check("Id", json!(3.0)).len(), 1);
+        let e = check("Id", json!(3.0));
+        assert_eq!(e.len(), 1, "{e:?}");
+        assert!(e[0].contains("integer"), "{e:?}");
         assert_eq!(check("Id", json!(0)).len(), 1);
         assert_eq!(check("Id", json!("3")).len(), 1);
+        let either = json!({"type": ["integer", "null"]});
+        let d = json!({});
+        assert!(Validator::new(&d).errors(&either, &json!(null)).is_empty());
+        assert_eq!(Validator::new(&d).errors(&either, &json!(1.0)).len(), 1);
     }
 
     #[test]
@@ -616,7 +451,9 @@ mod tests {
         assert!(check("Vec3", json!([1, 2.5, -3])).is_empty());
         assert_eq!(check("Vec3", json!([1, 2])).len(), 1);
         assert_eq!(check("Vec3", json!([1, 2, 3, 4])).len(), 1);
-        assert_eq!(check("Vec3", json!([1, "2", 3])).len(), 1);
+        let e = check("Vec3", json!([1, "2", 3]));
+        assert_eq!(e.len(), 1, "{e:?}");
+        assert!(e[0].starts_with("/1: "), "{e:?}");
     }
 
     #[test]
@@ -628,7 +465,16 @@ mod tests {
             "Box",
             json!({"type": "box", "size": [1, 1, 1], "colour": 1}),
         );
-        assert!(e[0].contains("\"colour\""), "{e:?}");
+        assert!(e[0].contains("colour"), "{e:?}");
+    }
+
+    #[test]
+    fn strings_match_their_pattern() {
+        assert!(check("Colour", json!("#00ff7f")).is_empty());
+        assert_eq!(check("Colour", json!("00ff7f")).len(), 1);
+        assert!(check("Name", json!("table")).is_empty());
+        assert_eq!(check("Name", json!("ta ble")).len(), 1);
+        assert_eq!(check("Name", json!("ta\u{200b}ble")).len(), 1);
     }
 
     #[test]
@@ -636,7 +482,7 @@ mod tests {
         assert!(check("Shape", json!({"type": "ball", "radius": 2})).is_empty());
         let e = check("Shape", json!({"type": "ball", "radius": 0}));
         assert_eq!(e.len(), 1, "{e:?}");
-        assert!(e[0].contains("/radius"), "{e:?}");
+        assert!(e[0].starts_with("/radius: "), "{e:?}");
         let e = check("Shape", json!({"type": "blob"}));
         assert!(e[0].contains("blob"), "{e:?}");
         let e = check("Shape", json!({"size": [1, 1, 1]}));
@@ -647,10 +493,15 @@ mod tests {
     fn one_of_refuses_two_matches_and_allows_null() {
         assert!(check("Named", json!({"name": null})).is_empty());
         assert!(check("Named", json!({"name": "a"})).is_empty());
-        assert!(!check("Named", json!({"name": ""})).is_empty());
+        let e = check("Named", json!({"name": ""}));
+        assert!(
+            e[0].starts_with("/name: matches no branch of oneOf"),
+            "{e:?}"
+        );
         let d = json!({});
         let both = json!({"oneOf": [{"type": "number"}, {"type": "integer"}]});
         assert_eq!(Validator::new(&d).errors(&both, &json!(1)).len(), 1);
+        assert!(Validator::new(&d).errors(&both, &json!(1.0)).is_empty());
     }
 
     #[test]
@@ -660,8 +511,15 @@ mod tests {
         let bad = json!({"type": "string", "contentSchema": {}});
         assert_eq!(v.schema_problems(&bad, "#").len(), 1);
         assert_eq!(v.errors(&bad, &json!("a")).len(), 1);
+        let nullable = json!({"type": "string", "nullable": true});
+        assert_eq!(v.schema_problems(&nullable, "#").len(), 1);
         let dangling = json!({"$ref": "#/components/schemas/Nope"});
         assert_eq!(v.schema_problems(&dangling, "#").len(), 1);
+        assert_eq!(v.errors(&dangling, &json!(1)).len(), 1);
+        let malformed = json!({"type": "int"});
+        assert_eq!(v.schema_problems(&malformed, "#").len(), 1);
+        let undefined = json!({"type": "object", "required": ["a"], "properties": {}});
+        assert_eq!(v.schema_problems(&undefined, "#").len(), 1);
         let shape = d.pointer("/components/schemas/Shape").unwrap();
         assert!(v.schema_problems(shape, "#").is_empty());
         let mut wrong = shape.clone();
