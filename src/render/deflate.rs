@@ -62,11 +62,47 @@ pub(super) fn zlib_stream(
             deflate_band(band, row_bytes, filter_up)
         })
         .collect();
+    frame(&bands)
+}
+
+/// The zlib stream [`zlib_stream`] makes, cut into the same bands, but with each band's
+/// Up-filtered bytes (filter-type bytes included) compressed by `compress`, which must
+/// return raw DEFLATE ending in a sync flush. It measures other DEFLATE encoders on
+/// exactly the input and framing of this one.
+pub(super) fn zlib_stream_with(
+    rows: usize,
+    row_bytes: usize,
+    band_rows: usize,
+    filter_up: &(impl Fn(usize, &mut [u8]) + Sync),
+    compress: &(impl Fn(&[u8]) -> Vec<u8> + Sync),
+) -> Vec<u8> {
+    let bands: Vec<Band> = (0..rows.div_ceil(band_rows))
+        .into_par_iter()
+        .map(|b| {
+            let band = b * band_rows..((b + 1) * band_rows).min(rows);
+            let mut filtered = vec![0; band.len() * (row_bytes + 1)];
+            for (y, line) in band.zip(filtered.chunks_exact_mut(row_bytes + 1)) {
+                line[0] = FILTER_UP;
+                filter_up(y, &mut line[1..]);
+            }
+            Band {
+                deflate: compress(&filtered),
+                adler: simd_adler32::adler32(&filtered.as_slice()),
+                len: filtered.len(),
+            }
+        })
+        .collect();
+    frame(&bands)
+}
+
+/// The zlib stream around `bands`: header, the bands in order, a final empty stored
+/// block and the combined Adler-32.
+fn frame(bands: &[Band]) -> Vec<u8> {
     let size: usize = bands.iter().map(|b| b.deflate.len()).sum();
     let mut z = Vec::with_capacity(ZLIB_HEADER.len() + size + FINAL_EMPTY_BLOCK.len() + 4);
     z.extend_from_slice(&ZLIB_HEADER);
     let mut adler = 1;
-    for band in &bands {
+    for band in bands {
         z.extend_from_slice(&band.deflate);
         adler = adler32_combine(adler, band.adler, band.len);
     }

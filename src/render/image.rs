@@ -80,24 +80,38 @@ impl RgbImage {
     ///
     /// Panics if the width or height is 0 (PNG has no empty images).
     pub fn to_png(&self) -> Vec<u8> {
+        self.png(None)
+    }
+
+    /// The PNG file [`to_png`](Self::to_png) writes, except that `compress_band` makes the
+    /// raw DEFLATE (ending in a sync flush) of each band of Up-filtered rows, the bands cut
+    /// and framed as `to_png` does: for measuring other DEFLATE encoders on the same input.
+    #[doc(hidden)]
+    pub fn to_png_with(&self, compress_band: impl Fn(&[u8]) -> Vec<u8> + Sync) -> Vec<u8> {
+        self.png(Some(&compress_band))
+    }
+
+    fn png(&self, compress_band: Option<&BandEncoder>) -> Vec<u8> {
         let row = self.width as usize * 3;
+        let filter_up = |y: usize, out: &mut [u8]| {
+            let cur = &self.data[y * row..(y + 1) * row];
+            if y == 0 {
+                out.copy_from_slice(cur);
+                return;
+            }
+            let above = &self.data[(y - 1) * row..y * row];
+            for ((o, &c), &a) in out.iter_mut().zip(cur).zip(above) {
+                *o = c.wrapping_sub(a);
+            }
+        };
         encode_png(
             self.width,
             self.height,
             ColorType::Rgb,
             BitDepth::Eight,
             row,
-            |y, out| {
-                let cur = &self.data[y * row..(y + 1) * row];
-                if y == 0 {
-                    out.copy_from_slice(cur);
-                    return;
-                }
-                let above = &self.data[(y - 1) * row..y * row];
-                for ((o, &c), &a) in out.iter_mut().zip(cur).zip(above) {
-                    *o = c.wrapping_sub(a);
-                }
-            },
+            filter_up,
+            compress_band,
         )
     }
 }
@@ -141,34 +155,53 @@ impl Gray16 {
     ///
     /// Panics if the width or height is 0 (PNG has no empty images).
     pub fn to_png(&self) -> Vec<u8> {
+        self.png(None)
+    }
+
+    /// The PNG file [`to_png`](Self::to_png) writes, except that `compress_band` makes the
+    /// raw DEFLATE (ending in a sync flush) of each band of Up-filtered rows, the bands cut
+    /// and framed as `to_png` does: for measuring other DEFLATE encoders on the same input.
+    #[doc(hidden)]
+    pub fn to_png_with(&self, compress_band: impl Fn(&[u8]) -> Vec<u8> + Sync) -> Vec<u8> {
+        self.png(Some(&compress_band))
+    }
+
+    fn png(&self, compress_band: Option<&BandEncoder>) -> Vec<u8> {
         let w = self.width as usize;
+        let filter_up = |y: usize, out: &mut [u8]| {
+            let cur = &self.data[y * w..(y + 1) * w];
+            if y == 0 {
+                for (o, &c) in out.chunks_exact_mut(2).zip(cur) {
+                    o.copy_from_slice(&c.to_be_bytes());
+                }
+                return;
+            }
+            // PNG filters work on bytes: high and low bytes are differenced apart.
+            let above = &self.data[(y - 1) * w..y * w];
+            for ((o, &c), &a) in out.chunks_exact_mut(2).zip(cur).zip(above) {
+                let (c, a) = (c.to_be_bytes(), a.to_be_bytes());
+                o[0] = c[0].wrapping_sub(a[0]);
+                o[1] = c[1].wrapping_sub(a[1]);
+            }
+        };
         encode_png(
             self.width,
             self.height,
             ColorType::Grayscale,
             BitDepth::Sixteen,
             w * 2,
-            |y, out| {
-                let cur = &self.data[y * w..(y + 1) * w];
-                if y == 0 {
-                    for (o, &c) in out.chunks_exact_mut(2).zip(cur) {
-                        o.copy_from_slice(&c.to_be_bytes());
-                    }
-                    return;
-                }
-                // PNG filters work on bytes: high and low bytes are differenced apart.
-                let above = &self.data[(y - 1) * w..y * w];
-                for ((o, &c), &a) in out.chunks_exact_mut(2).zip(cur).zip(above) {
-                    let (c, a) = (c.to_be_bytes(), a.to_be_bytes());
-                    o[0] = c[0].wrapping_sub(a[0]);
-                    o[1] = c[1].wrapping_sub(a[1]);
-                }
-            },
+            filter_up,
+            compress_band,
         )
     }
 }
+
+/// A DEFLATE encoder standing in for the renderer's own, band by band (see `to_png_with`).
+type BandEncoder<'a> = dyn Fn(&[u8]) -> Vec<u8> + Sync + 'a;
+
 /// The PNG file of an image whose `height` rows are `row_bytes` bytes each;
 /// `filter_up(y, out)` writes row `y` Up-filtered (without the filter-type byte) into `out`.
+/// The bands are compressed by the `deflate` module, or by `compress_band` if given.
 fn encode_png(
     width: u32,
     height: u32,
@@ -176,14 +209,16 @@ fn encode_png(
     depth: BitDepth,
     row_bytes: usize,
     filter_up: impl Fn(usize, &mut [u8]) + Sync,
+    compress_band: Option<&BandEncoder>,
 ) -> Vec<u8> {
     let rows = height as usize;
-    let idat = deflate::zlib_stream(
-        rows,
-        row_bytes,
-        deflate::band_rows(rows, row_bytes + 1),
-        &filter_up,
-    );
+    let band_rows = deflate::band_rows(rows, row_bytes + 1);
+    let idat = match compress_band {
+        None => deflate::zlib_stream(rows, row_bytes, band_rows, &filter_up),
+        Some(compress) => {
+            deflate::zlib_stream_with(rows, row_bytes, band_rows, &filter_up, &compress)
+        }
+    };
     let mut out = Vec::with_capacity(idat.len() + 64);
     let mut encoder = Encoder::new(&mut out, width, height);
     encoder.set_color(color);
@@ -202,7 +237,7 @@ fn encode_png(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::deflate::{ZLIB_HEADER, zlib_stream};
+    use crate::render::deflate::{ZLIB_HEADER, band_rows, zlib_stream};
 
     #[test]
     fn pngs_decode_back_to_the_same_pixels() {
@@ -416,6 +451,45 @@ mod tests {
         let g = gray16(w, h, 8);
         let inflated = miniz_oxide::inflate::decompress_to_vec_zlib(&idat(&g.to_png()));
         assert!(inflated.unwrap() == up_filtered(&be_bytes(&g), w as usize * 2));
+    }
+
+    #[test]
+    fn pngs_with_another_band_encoder_hold_the_same_rows() {
+        // Stored blocks, then a sync flush: the simplest raw DEFLATE a band can be.
+        let bands = std::sync::Mutex::new(Vec::new());
+        let stored = |band: &[u8]| {
+            bands.lock().unwrap().push(band.to_vec());
+            let mut z = Vec::new();
+            for chunk in band.chunks(65_535) {
+                let len = chunk.len() as u16;
+                z.push(0);
+                z.extend_from_slice(&len.to_le_bytes());
+                z.extend_from_slice(&(!len).to_le_bytes());
+                z.extend_from_slice(chunk);
+            }
+            z.extend_from_slice(&[0, 0, 0, 0xff, 0xff]);
+            z
+        };
+        let (w, h) = (700, 500);
+        let img = rgb(w, h, 11);
+        assert_eq!(decode(&img.to_png_with(stored)).0, img.data);
+        let g = gray16(w, h, 12);
+        assert!(decode(&g.to_png_with(stored)).0 == be_bytes(&g));
+        // The bands (compressed in parallel, so in any order) are whole filtered lines, cut
+        // as to_png cuts them.
+        let bands = bands.into_inner().unwrap();
+        let (rgb_line, gray_line) = (w as usize * 3 + 1, w as usize * 2 + 1);
+        let mut sizes: Vec<usize> = bands.iter().map(Vec::len).collect();
+        sizes.sort_unstable();
+        let mut expected = Vec::new();
+        for line in [rgb_line, gray_line] {
+            let per_band = band_rows(h as usize, line);
+            for first in (0..h as usize).step_by(per_band) {
+                expected.push(per_band.min(h as usize - first) * line);
+            }
+        }
+        expected.sort_unstable();
+        assert_eq!(sizes, expected);
     }
 
     #[test]
