@@ -132,19 +132,19 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         )
         .route(
             "/v1/spatial/sphere",
-            reads(get(spatial::sphere_get).post(spatial::sphere_post)),
+            reads(get(spatial::sphere).post(spatial::sphere)),
         )
         .route(
             "/v1/spatial/box",
-            reads(get(spatial::box_get).post(spatial::box_post)),
+            reads(get(spatial::aabb).post(spatial::aabb)),
         )
         .route(
             "/v1/spatial/nearest",
-            reads(get(spatial::nearest_get).post(spatial::nearest_post)),
+            reads(get(spatial::nearest).post(spatial::nearest)),
         )
         .route(
             "/v1/spatial/ray",
-            reads(get(spatial::ray_get).post(spatial::ray_post)),
+            reads(get(spatial::ray).post(spatial::ray)),
         )
         .route("/v1/lights", reads(get(named::list::<Light>)))
         .route(

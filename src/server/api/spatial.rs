@@ -1,5 +1,6 @@
 //! Spatial access over HTTP: `/v1/spatial/{sphere,box,nearest,ray}`, each as a `GET`
-//! with a query string and as a `POST` with a JSON body, answered from the shared index
+//! with a query string and as a `POST` with a JSON body (the query string converted into
+//! the body's type, so one handler serves both), answered from the shared index
 //! ([`SpatialAccess`](crate::server::index::SpatialAccess)): on the async thread itself
 //! when the answer fits a small budget (a few thousand features, a few hundred bodies),
 //! else on a blocking thread. Answers carry the index's revision in the body and in
@@ -14,9 +15,10 @@
 //! Box corners, radii and distances beyond that limit are clamped to it: the world's
 //! content lies well inside (see [`crate::model::range`]), so no answer changes.
 
-use axum::extract::State;
-use axum::http::StatusCode;
+use axum::extract::{FromRequest, FromRequestParts, Request, State};
+use axum::http::{Method, StatusCode};
 use glam::DVec3;
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use super::extract::{ApiJson, ApiQuery};
@@ -49,6 +51,9 @@ pub struct SphereReq {
     /// The most faces, edges and vertices in the answer.
     #[serde(default)]
     pub max_features: Option<usize>,
+    /// How the request spelled its fields, for the problems that point at them.
+    #[serde(skip, default = "json_names")]
+    names: &'static Names,
 }
 
 /// `GET /v1/spatial/sphere?x=&y=&z=&r=&detail=&tolerance=&max_features=`.
@@ -81,6 +86,9 @@ pub struct BoxReq {
     /// The most faces, edges and vertices in the answer.
     #[serde(default)]
     pub max_features: Option<usize>,
+    /// How the request spelled its fields, for the problems that point at them.
+    #[serde(skip, default = "json_names")]
+    names: &'static Names,
 }
 
 /// `GET /v1/spatial/box?min_x=&min_y=&min_z=&max_x=&max_y=&max_z=&detail=&max_features=`.
@@ -108,6 +116,9 @@ pub struct NearestReq {
     /// The farthest a body may be, meters (default: no limit).
     #[serde(default)]
     pub max_distance: Option<f64>,
+    /// How the request spelled its fields, for the problems that point at them.
+    #[serde(skip, default = "json_names")]
+    names: &'static Names,
 }
 
 /// `GET /v1/spatial/nearest?x=&y=&z=&max_distance=`.
@@ -132,6 +143,9 @@ pub struct RayReq {
     /// The farthest along the ray to look, meters (default: no limit).
     #[serde(default)]
     pub max_distance: Option<f64>,
+    /// How the request spelled its fields, for the problems that point at them.
+    #[serde(skip, default = "json_names")]
+    names: &'static Names,
 }
 
 /// `GET /v1/spatial/ray?x=&y=&z=&dx=&dy=&dz=&max_distance=`.
@@ -149,8 +163,11 @@ pub struct RayParams {
 }
 
 /// The names a request form gives its fields, for the problems that point at them.
+#[derive(Debug)]
 struct Names {
     center: &'static str,
+    point: &'static str,
+    origin: &'static str,
     radius: &'static str,
     min: [&'static str; 3],
     max: [&'static str; 3],
@@ -160,6 +177,8 @@ struct Names {
 
 const JSON_NAMES: Names = Names {
     center: "center",
+    point: "point",
+    origin: "origin",
     radius: "radius",
     min: ["min[0]", "min[1]", "min[2]"],
     max: ["max[0]", "max[1]", "max[2]"],
@@ -169,12 +188,104 @@ const JSON_NAMES: Names = Names {
 
 const QUERY_NAMES: Names = Names {
     center: "x, y and z",
+    point: "x, y and z",
+    origin: "x, y and z",
     radius: "r",
     min: ["min_x", "min_y", "min_z"],
     max: ["max_x", "max_y", "max_z"],
     direction: "dx, dy and dz",
     zero_direction: "dx, dy and dz must not all be zero",
 };
+
+fn json_names() -> &'static Names {
+    &JSON_NAMES
+}
+
+impl From<SphereParams> for SphereReq {
+    fn from(p: SphereParams) -> Self {
+        SphereReq {
+            center: [p.x, p.y, p.z],
+            radius: p.r,
+            detail: p.detail,
+            tolerance: p.tolerance,
+            max_features: p.max_features,
+            names: &QUERY_NAMES,
+        }
+    }
+}
+
+impl From<BoxParams> for BoxReq {
+    fn from(p: BoxParams) -> Self {
+        BoxReq {
+            min: [p.min_x, p.min_y, p.min_z],
+            max: [p.max_x, p.max_y, p.max_z],
+            detail: p.detail,
+            max_features: p.max_features,
+            names: &QUERY_NAMES,
+        }
+    }
+}
+
+impl From<NearestParams> for NearestReq {
+    fn from(p: NearestParams) -> Self {
+        NearestReq {
+            point: [p.x, p.y, p.z],
+            max_distance: p.max_distance,
+            names: &QUERY_NAMES,
+        }
+    }
+}
+
+impl From<RayParams> for RayReq {
+    fn from(p: RayParams) -> Self {
+        RayReq {
+            origin: [p.x, p.y, p.z],
+            direction: [p.dx, p.dy, p.dz],
+            max_distance: p.max_distance,
+            names: &QUERY_NAMES,
+        }
+    }
+}
+
+/// A query as its `POST` route's JSON body gives it, with the query string of its `GET`
+/// twin converted into the same type.
+trait Twin: DeserializeOwned + Send + 'static {
+    /// The `GET` form.
+    type Params: DeserializeOwned + Send + 'static + Into<Self>;
+}
+
+impl Twin for SphereReq {
+    type Params = SphereParams;
+}
+impl Twin for BoxReq {
+    type Params = BoxParams;
+}
+impl Twin for NearestReq {
+    type Params = NearestParams;
+}
+impl Twin for RayReq {
+    type Params = RayParams;
+}
+
+/// The query of a spatial route, read from a `GET`'s query string ([`ApiQuery`]) or a
+/// `POST`'s JSON body ([`ApiJson`]), refused as those refuse.
+pub(super) struct Asked<T>(T);
+
+impl<S: Send + Sync, T: Twin> FromRequest<S> for Asked<T> {
+    type Rejection = Problem;
+
+    async fn from_request(req: Request, state: &S) -> Result<Self, Problem> {
+        if req.method() == Method::GET {
+            let (mut parts, _) = req.into_parts();
+            let ApiQuery(params) =
+                ApiQuery::<T::Params>::from_request_parts(&mut parts, state).await?;
+            Ok(Asked(params.into()))
+        } else {
+            let ApiJson(query) = ApiJson::<T>::from_request(req, state).await?;
+            Ok(Asked(query))
+        }
+    }
+}
 
 /// 422 `invalid-query`.
 fn invalid(detail: impl Into<String>) -> Problem {
@@ -336,94 +447,36 @@ fn direction(v: [f64; 3], names: &Names) -> Result<DVec3, Problem> {
 
 // ----- handlers ----------------------------------------------------------------------
 
-/// `POST /v1/spatial/sphere`.
-pub(super) async fn sphere_post(
-    State(state): State<AppState>,
-    ApiJson(r): ApiJson<SphereReq>,
-) -> Answer {
+/// `GET` and `POST /v1/spatial/sphere`.
+pub(super) async fn sphere(State(state): State<AppState>, Asked(r): Asked<SphereReq>) -> Answer {
     let q = sphere_query(
         r.center,
         r.radius,
         r.detail,
         r.tolerance,
         r.max_features,
-        &JSON_NAMES,
+        r.names,
     )?;
     run(&state, move |s, inline| s.sphere(&inline_sphere(q, inline))).await
 }
 
-/// `GET /v1/spatial/sphere`.
-pub(super) async fn sphere_get(
-    State(state): State<AppState>,
-    ApiQuery(r): ApiQuery<SphereParams>,
-) -> Answer {
-    let q = sphere_query(
-        [r.x, r.y, r.z],
-        r.r,
-        r.detail,
-        r.tolerance,
-        r.max_features,
-        &QUERY_NAMES,
-    )?;
-    run(&state, move |s, inline| s.sphere(&inline_sphere(q, inline))).await
-}
-
-/// `POST /v1/spatial/box`.
-pub(super) async fn box_post(State(state): State<AppState>, ApiJson(r): ApiJson<BoxReq>) -> Answer {
-    let q = box_query(r.min, r.max, r.detail, r.max_features, &JSON_NAMES)?;
+/// `GET` and `POST /v1/spatial/box`.
+pub(super) async fn aabb(State(state): State<AppState>, Asked(r): Asked<BoxReq>) -> Answer {
+    let q = box_query(r.min, r.max, r.detail, r.max_features, r.names)?;
     run(&state, move |s, inline| s.aabb(&inline_box(q, inline))).await
 }
 
-/// `GET /v1/spatial/box`.
-pub(super) async fn box_get(
-    State(state): State<AppState>,
-    ApiQuery(r): ApiQuery<BoxParams>,
-) -> Answer {
-    let q = box_query(
-        [r.min_x, r.min_y, r.min_z],
-        [r.max_x, r.max_y, r.max_z],
-        r.detail,
-        r.max_features,
-        &QUERY_NAMES,
-    )?;
-    run(&state, move |s, inline| s.aabb(&inline_box(q, inline))).await
-}
-
-/// `POST /v1/spatial/nearest`.
-pub(super) async fn nearest_post(
-    State(state): State<AppState>,
-    ApiJson(r): ApiJson<NearestReq>,
-) -> Answer {
-    let p = point(r.point, "point")?;
+/// `GET` and `POST /v1/spatial/nearest`.
+pub(super) async fn nearest(State(state): State<AppState>, Asked(r): Asked<NearestReq>) -> Answer {
+    let p = point(r.point, r.names.point)?;
     let d = max_distance(r.max_distance)?;
     run(&state, move |s, _| s.nearest(p, d)).await
 }
 
-/// `GET /v1/spatial/nearest`.
-pub(super) async fn nearest_get(
-    State(state): State<AppState>,
-    ApiQuery(r): ApiQuery<NearestParams>,
-) -> Answer {
-    let p = point([r.x, r.y, r.z], QUERY_NAMES.center)?;
-    let d = max_distance(r.max_distance)?;
-    run(&state, move |s, _| s.nearest(p, d)).await
-}
-
-/// `POST /v1/spatial/ray`.
-pub(super) async fn ray_post(State(state): State<AppState>, ApiJson(r): ApiJson<RayReq>) -> Answer {
-    let o = point(r.origin, "origin")?;
-    let d = direction(r.direction, &JSON_NAMES)?;
-    let m = max_distance(r.max_distance)?;
-    run(&state, move |s, _| s.ray(o, d, m)).await
-}
-
-/// `GET /v1/spatial/ray`.
-pub(super) async fn ray_get(
-    State(state): State<AppState>,
-    ApiQuery(r): ApiQuery<RayParams>,
-) -> Answer {
-    let o = point([r.x, r.y, r.z], QUERY_NAMES.center)?;
-    let d = direction([r.dx, r.dy, r.dz], &QUERY_NAMES)?;
+/// `GET` and `POST /v1/spatial/ray`.
+pub(super) async fn ray(State(state): State<AppState>, Asked(r): Asked<RayReq>) -> Answer {
+    let o = point(r.origin, r.names.origin)?;
+    let d = direction(r.direction, r.names)?;
     let m = max_distance(r.max_distance)?;
     run(&state, move |s, _| s.ray(o, d, m)).await
 }
