@@ -15,7 +15,7 @@
 //! |---|---|
 //! | [`model`]: the kernel | — |
 //! | [`spatial`]: the index and its queries | model |
-//! | [`edit`]: the command language, in the journal's serde form, and `apply` | model |
+//! | [`edit`]: the command language, in the journal's serde form; `plan` and `apply` | model |
 //! | [`store`]: journal and snapshots | model, edit |
 //! | `mesh`: file formats | model |
 //! | [`camera`]: projection and clipping | model |
