@@ -713,7 +713,7 @@ async fn from_image(
             decoded.channels,
             &decoded.pixels,
         )
-        .map_err(solve_problem)?;
+        .map_err(|e| solve_problem(e.into()))?;
         let scene = appearance.scene(&world);
         align_to_image(&scene, &start, &luma, &AlignOptions::default()).map_err(|e| {
             tracing::info!(error = %e, "camera alignment refused");

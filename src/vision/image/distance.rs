@@ -22,7 +22,7 @@
 
 use rayon::prelude::*;
 
-use crate::vision::solve::SolveError;
+use super::ImageError;
 
 /// The value of [`DistanceField::nearest_index`] where there is no site at all.
 pub const NO_SITE: u32 = u32::MAX;
@@ -43,24 +43,24 @@ pub struct DistanceField {
 impl DistanceField {
     /// The distance transform of the pixels `i` (row-major) with `is_site[i]`.
     ///
-    /// Refused with [`SolveError::ImageSamples`] unless
-    /// `is_site.len() == width × height`, and with [`SolveError::BadParameter`] when the
+    /// Refused with [`ImageError::Samples`] unless
+    /// `is_site.len() == width × height`, and with [`ImageError::BadParameter`] when the
     /// grid has more pixels than a `u32` index can number.
     pub fn from_sites(
         width: u32,
         height: u32,
         is_site: &[bool],
-    ) -> Result<DistanceField, SolveError> {
+    ) -> Result<DistanceField, ImageError> {
         let (w, h) = (width as usize, height as usize);
         let n = w.checked_mul(h);
         if n != Some(is_site.len()) {
-            return Err(SolveError::ImageSamples {
+            return Err(ImageError::Samples {
                 expected: n.unwrap_or(usize::MAX),
                 got: is_site.len(),
             });
         }
         if is_site.len() >= NO_SITE as usize {
-            return Err(SolveError::BadParameter {
+            return Err(ImageError::BadParameter {
                 what: "the number of pixels",
                 value: is_site.len() as f64,
             });
@@ -286,7 +286,7 @@ mod tests {
         assert_eq!(field.squared_distance(1, 1), None);
         assert_eq!(
             DistanceField::from_sites(4, 3, &[false; 11]),
-            Err(SolveError::ImageSamples {
+            Err(ImageError::Samples {
                 expected: 12,
                 got: 11
             })

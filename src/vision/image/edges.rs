@@ -36,9 +36,9 @@
 use glam::Vec2;
 use rayon::prelude::*;
 
+use super::ImageError;
 use super::distance::{DistanceField, NO_SITE};
 use super::luma::Luma;
-use crate::vision::solve::SolveError;
 
 /// How edges are told from noise (see the [image module's documentation](crate::vision::image)).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,13 +62,13 @@ impl Default for EdgeOptions {
 }
 
 impl EdgeOptions {
-    pub(crate) fn validate(&self) -> Result<(), SolveError> {
+    pub(crate) fn validate(&self) -> Result<(), ImageError> {
         for (value, what) in [
             (self.noise_factor, "the edge noise factor"),
             (self.min_gradient, "the minimum edge gradient"),
         ] {
             if !(value.is_finite() && value > 0.0) {
-                return Err(SolveError::BadParameter { what, value });
+                return Err(ImageError::BadParameter { what, value });
             }
         }
         Ok(())
@@ -105,10 +105,10 @@ pub struct EdgeMap {
 impl EdgeMap {
     /// The edges of `image`.
     ///
-    /// Refused with [`SolveError::BadParameter`] when `options` are out of range.
+    /// Refused with [`ImageError::BadParameter`] when `options` are out of range.
     /// Postcondition: every edgel passed the threshold ([`EdgeMap::threshold`]) and
     /// non-maximum suppression; a blank picture has none.
-    pub fn detect(image: &Luma, options: &EdgeOptions) -> Result<EdgeMap, SolveError> {
+    pub fn detect(image: &Luma, options: &EdgeOptions) -> Result<EdgeMap, ImageError> {
         options.validate()?;
         let (w, h) = (image.width() as usize, image.height() as usize);
         let gradient = Gradient::of(image);
@@ -550,7 +550,7 @@ mod tests {
         };
         assert!(matches!(
             EdgeMap::detect(&image, &bad),
-            Err(SolveError::BadParameter { .. })
+            Err(ImageError::BadParameter { .. })
         ));
     }
 }

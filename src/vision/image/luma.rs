@@ -1,6 +1,6 @@
 //! Grey-level pictures: from decoded samples, and halved for a pyramid.
 
-use crate::vision::solve::SolveError;
+use super::ImageError;
 
 /// An 8-bit grey-level picture, row-major from the top-left pixel, in the camera's pixel
 /// convention (pixel `(x, y)` covers `[x, x+1) × [y, y+1)`, its centre is
@@ -20,17 +20,17 @@ impl Luma {
     /// Colour becomes luma with Rec. 601 weights, `Y = 0.299·R + 0.587·G + 0.114·B`
     /// (rounded); alpha is ignored (the picture is what the camera saw).
     ///
-    /// Refused with [`SolveError::BadParameter`] for a zero width or height,
-    /// [`SolveError::ImageChannels`] for another channel count, and
-    /// [`SolveError::ImageSamples`] unless `samples.len() == width × height × channels`.
+    /// Refused with [`ImageError::BadParameter`] for a zero width or height,
+    /// [`ImageError::Channels`] for another channel count, and
+    /// [`ImageError::Samples`] unless `samples.len() == width × height × channels`.
     pub fn from_samples(
         width: u32,
         height: u32,
         channels: u8,
         samples: &[u8],
-    ) -> Result<Luma, SolveError> {
+    ) -> Result<Luma, ImageError> {
         if width == 0 || height == 0 {
-            return Err(SolveError::BadParameter {
+            return Err(ImageError::BadParameter {
                 what: if width == 0 {
                     "the image width"
                 } else {
@@ -40,13 +40,13 @@ impl Luma {
             });
         }
         if !(1..=4).contains(&channels) {
-            return Err(SolveError::ImageChannels { channels });
+            return Err(ImageError::Channels { channels });
         }
         let expected = (width as usize)
             .checked_mul(height as usize)
             .and_then(|n| n.checked_mul(channels as usize));
         if expected != Some(samples.len()) {
-            return Err(SolveError::ImageSamples {
+            return Err(ImageError::Samples {
                 expected: expected.unwrap_or(usize::MAX),
                 got: samples.len(),
             });
@@ -144,18 +144,18 @@ mod tests {
     fn malformed_samples_are_refused() {
         assert_eq!(
             Luma::from_samples(2, 2, 3, &[0; 11]),
-            Err(SolveError::ImageSamples {
+            Err(ImageError::Samples {
                 expected: 12,
                 got: 11
             })
         );
         assert_eq!(
             Luma::from_samples(1, 1, 5, &[0; 5]),
-            Err(SolveError::ImageChannels { channels: 5 })
+            Err(ImageError::Channels { channels: 5 })
         );
         assert!(matches!(
             Luma::from_samples(0, 1, 1, &[]),
-            Err(SolveError::BadParameter { .. })
+            Err(ImageError::BadParameter { .. })
         ));
     }
 

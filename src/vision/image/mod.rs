@@ -7,6 +7,8 @@
 //! * [`EdgeMap`]: Sobel gradients, non-maximum suppression along the gradient and a
 //!   threshold set from the picture's own noise; each edge pixel (an [`Edgel`]) carries
 //!   a sub-pixel position on the edge and the edge's unit normal.
+//! * [`ImageError`]: why a picture, or what is asked of it, was refused; the camera
+//!   solution wraps it in its own error.
 //! * [`DistanceField`]: the exact Euclidean distance transform of a set of pixels
 //!   (Felzenszwalb–Huttenlocher), with the nearest of those pixels for every pixel, so an
 //!   edge can be found from any point of the image in constant time.
@@ -21,8 +23,10 @@
 
 mod distance;
 mod edges;
+mod error;
 mod luma;
 
 pub use distance::{DistanceField, NO_SITE};
 pub use edges::{EdgeMap, EdgeOptions, Edgel};
+pub use error::ImageError;
 pub use luma::Luma;

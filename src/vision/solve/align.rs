@@ -212,7 +212,7 @@ impl AlignOptions {
             return bad("min_inlier_fraction", self.min_inlier_fraction);
         }
         self.loss.validate()?;
-        self.edges.validate()
+        Ok(self.edges.validate()?)
     }
 }
 

@@ -225,6 +225,17 @@ pub enum SolveError {
     },
 }
 
+impl From<crate::vision::image::ImageError> for SolveError {
+    fn from(e: crate::vision::image::ImageError) -> Self {
+        use crate::vision::image::ImageError;
+        match e {
+            ImageError::Channels { channels } => SolveError::ImageChannels { channels },
+            ImageError::Samples { expected, got } => SolveError::ImageSamples { expected, got },
+            ImageError::BadParameter { what, value } => SolveError::BadParameter { what, value },
+        }
+    }
+}
+
 /// The largest magnitude of a world point's coordinate or an observation's: the
 /// spatial query limit of [`crate::model::range`], far past the world's content, and
 /// small enough that the solvers' sums of squares cannot overflow.
