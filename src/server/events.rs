@@ -253,16 +253,30 @@ impl Subscriber {
             }
             Since::Resync { revision, oldest } => {
                 self.done = true;
-                let data = serde_json::json!({
-                    "resync": true,
-                    "since": self.last,
-                    "revision": revision,
-                    "oldest": oldest,
-                });
-                Some(Event::default().event("resync").data(data.to_string()))
+                let data = Resync {
+                    resync: true,
+                    since: self.last,
+                    revision,
+                    oldest,
+                };
+                let text = serde_json::to_string(&data).unwrap_or_else(|_| "{}".into());
+                Some(Event::default().event("resync").data(text))
             }
         }
     }
+}
+
+/// The data of a `resync` event: the history no longer reaches back to `since`.
+#[derive(serde::Serialize)]
+struct Resync {
+    /// Always `true`.
+    resync: bool,
+    /// The revision the stream was to follow on from.
+    since: u64,
+    /// The world's revision.
+    revision: u64,
+    /// The oldest revision whose change is still kept, if any.
+    oldest: Option<u64>,
 }
 
 fn change_event(c: &Change) -> Event {
