@@ -183,3 +183,55 @@ fn small_writes_pass_a_large_body_being_built() {
     let ball = s.get(&format!("/v1/bodies/{}", made["id"])).ok();
     assert_eq!(ball["name"], "ball");
 }
+
+/// A large body refused, whether by its own parameters while it is built beside the
+/// owner or by the world when it is inserted (a taken name, an unknown parent), is
+/// answered with a problem and leaves the world as it was: same revision, and the next
+/// body gets the ids it would have had.
+#[test]
+fn a_large_body_refused_changes_nothing() {
+    let s = TestServer::start();
+    let first = s.post(
+        "/v1/bodies",
+        &json!({"name": "taken", "shape": {"type": "box", "size": [1, 1, 1]}}),
+    );
+    assert_eq!(first.status, 201);
+    let before = s.get("/v1/world").ok();
+    let sphere = |extra: serde_json::Value, radius: f64| {
+        let mut body =
+            json!({"shape": {"type": "sphere", "radius": radius, "segments": 128, "rings": 64}});
+        for (k, v) in extra.as_object().unwrap() {
+            body[k] = v.clone();
+        }
+        s.post("/v1/bodies", &body)
+    };
+    let bad_radius = sphere(json!({}), -1.0);
+    bad_radius.problem(422);
+    let taken = sphere(json!({"name": "taken"}), 1.0).problem(409);
+    assert_eq!(taken["type"], "urn:winged:problem:name-taken");
+    let orphan = sphere(json!({"parent": 999_999}), 1.0);
+    orphan.problem(404);
+    assert_eq!(s.get("/v1/world").ok(), before, "nothing changed");
+
+    // The next body's ids are those of a world that never saw the refusals.
+    let made = sphere(json!({"name": "ball"}), 1.0).ok();
+    let fresh = TestServer::start();
+    fresh.post(
+        "/v1/bodies",
+        &json!({"name": "taken", "shape": {"type": "box", "size": [1, 1, 1]}}),
+    );
+    let reference = fresh
+        .post(
+            "/v1/bodies",
+            &json!({"name": "ball", "shape": {"type": "sphere", "radius": 1.0, "segments": 128, "rings": 64}}),
+        )
+        .ok();
+    assert_eq!(made["id"], reference["id"]);
+    let topology = |srv: &TestServer, id: &serde_json::Value| {
+        srv.get(&format!("/v1/bodies/{id}/topology")).ok()["faces"][0].clone()
+    };
+    assert_eq!(
+        topology(&s, &made["id"]),
+        topology(&fresh, &reference["id"])
+    );
+}
