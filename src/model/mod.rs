@@ -11,6 +11,7 @@
 
 mod arena;
 pub mod body;
+pub mod boolean;
 pub mod camera;
 pub mod check;
 pub mod euler;
