@@ -97,14 +97,154 @@ pub enum BooleanError {
         /// The operand.
         operand: Which,
     },
+    /// A face that is not a simple polygon (it repeats a vertex, or its outline crosses
+    /// itself or has no area seen along its normal).
+    #[error("face {face} of {operand:?} is not a simple polygon")]
+    BadFace {
+        /// The operand.
+        operand: Which,
+        /// The face.
+        face: Serial,
+    },
+    /// A configuration the algorithm could not resolve. No input that passes the other
+    /// checks should reach it; it is reported instead of a wrong result.
+    #[error("the boolean could not be resolved: {what}")]
+    Unresolved {
+        /// What failed.
+        what: &'static str,
+    },
 }
 
 /// Takes `op` of the interiors of `a` and `b`.
 ///
 /// Preconditions: none on the geometry (refusals are errors). Postconditions: the
 /// shells bound exactly the set `op(interior(a), interior(b))`, rounded to f64 at the
-/// end; same inputs give bit-identical output.
+/// end; the same inputs give bit-identical output.
 pub fn boolean(a: Operand<'_>, b: Operand<'_>, op: Op) -> Result<Solution, BooleanError> {
-    let _ = (a, b, op);
-    todo!("boolean kernel")
+    let (mut pts, ma, mb) = mesh::meshes(a, b)?;
+    check_self(&mut pts, &ma, Which::A, a.body)?;
+    check_self(&mut pts, &mb, Which::B, b.body)?;
+    let mut traces = intersect::Traces::default();
+    let tree = broad::Tree::new(&mb.boxes);
+    let mut hits = Vec::new();
+    for (ta, bx) in ma.boxes.iter().enumerate() {
+        if !overlaps(*bx, mb.bounds) {
+            continue;
+        }
+        tree.query(bx[0], bx[1], &mut hits);
+        for &tb in &hits {
+            if overlaps(*bx, mb.boxes[tb as usize]) {
+                traces.pair(&mut pts, &ma, ta as u32, &mb, tb);
+            }
+        }
+    }
+    let pa = classify::pieces(&pts, &ma, &traces.segs_a, &traces)?;
+    let pb = classify::pieces(&pts, &mb, &traces.segs_b, &traces)?;
+    let ca = classify::classify(&mut pts, &pa, &ma, &mb)?;
+    let cb = classify::classify(&mut pts, &pb, &mb, &ma)?;
+    let mut kept = Vec::new();
+    for (i, c) in ca.iter().enumerate() {
+        if keeps_a(op, *c) {
+            kept.push(assemble::Kept {
+                tri: pa.tris[i],
+                source: Source {
+                    operand: Which::A,
+                    face: ma.face[pa.source[i] as usize],
+                },
+            });
+        }
+    }
+    for (i, c) in cb.iter().enumerate() {
+        if keeps_b(op, *c) {
+            let [p, q, r] = pb.tris[i];
+            kept.push(assemble::Kept {
+                tri: if op == Op::Difference {
+                    [p, r, q]
+                } else {
+                    [p, q, r]
+                },
+                source: Source {
+                    operand: Which::B,
+                    face: mb.face[pb.source[i] as usize],
+                },
+            });
+        }
+    }
+    let shells = assemble::assemble(&pts, &kept)?;
+    Ok(Solution { shells })
 }
+
+/// Whether a piece of A in class `c` bounds the result.
+fn keeps_a(op: Op, c: Class) -> bool {
+    match op {
+        Op::Union => matches!(c, Class::Out | Class::OnSame),
+        Op::Intersection => matches!(c, Class::In | Class::OnSame),
+        Op::Difference => matches!(c, Class::Out | Class::OnOpposite),
+    }
+}
+
+/// Whether a piece of B in class `c` bounds the result (turned over for a difference).
+/// Pieces on A's surface are represented by A's.
+fn keeps_b(op: Op, c: Class) -> bool {
+    match op {
+        Op::Union => c == Class::Out,
+        Op::Intersection | Op::Difference => c == Class::In,
+    }
+}
+
+fn overlaps(a: [DVec3; 2], b: [DVec3; 2]) -> bool {
+    a[0].cmple(b[1]).all() && b[0].cmple(a[1]).all()
+}
+
+/// Refuses an operand whose triangles cross each other (other than along the edges and
+/// at the vertices they share).
+fn check_self(
+    pts: &mut Points,
+    m: &mesh::Mesh,
+    which: Which,
+    _body: &Body,
+) -> Result<(), BooleanError> {
+    let tree = broad::Tree::new(&m.boxes);
+    let mut hits = Vec::new();
+    for (i, bx) in m.boxes.iter().enumerate() {
+        tree.query(bx[0], bx[1], &mut hits);
+        let t = m.tris[i];
+        for &j in &hits {
+            let j = j as usize;
+            if j <= i || !overlaps(*bx, m.boxes[j]) {
+                continue;
+            }
+            let u = m.tris[j];
+            let shared = t.iter().filter(|p| u.contains(p)).count();
+            if shared > 0 {
+                continue;
+            }
+            let mut probe = intersect::Traces::default();
+            let before = pts.defs.len();
+            probe.pair(pts, m, i as u32, m, j as u32);
+            pts.truncate(before);
+            if !probe.segs_a.is_empty() {
+                return Err(BooleanError::SelfIntersecting {
+                    operand: which,
+                    faces: [m.face[i], m.face[j]],
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+mod assemble;
+mod broad;
+mod classify;
+pub(crate) mod exact;
+mod intersect;
+mod mesh;
+mod point;
+mod split;
+
+use classify::Class;
+use point::Points;
+
+#[cfg(test)]
+mod tests;

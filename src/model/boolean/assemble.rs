@@ -1,0 +1,298 @@
+//! The kept pieces sewn into shells of polygons.
+//!
+//! 1. Each piece's edges are paired with the opposite edges of other pieces. Where more
+//!    than two pieces meet at an edge (bodies that touch along it), pieces of one
+//!    operand pair first, so that touching solids stay separate shells.
+//! 2. A vertex around which the pieces form several fans (solids touching at a point)
+//!    becomes one vertex per fan.
+//! 3. Pieces joined by edges form shells.
+//! 4. Within a shell, the pieces of one input face are merged into polygons: a region
+//!    grows across the edges it shares with pieces of the same face for as long as it
+//!    stays a disc (it never swallows a hole or pinches at a vertex).
+//! 5. Vertices where only two faces meet (they lie on the line the faces share) are
+//!    dropped.
+//! 6. Loci are rounded to the nearest f64, once.
+
+use std::collections::{BTreeMap, HashMap};
+
+use super::point::{Pid, Points};
+use super::{BooleanError, Shell, Source};
+
+/// A kept piece: its points (counter-clockwise seen from outside the result) and the
+/// input face it is part of.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Kept {
+    pub tri: [Pid; 3],
+    pub source: Source,
+}
+
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        parent[x as usize] = parent[parent[x as usize] as usize];
+        x = parent[x as usize];
+    }
+    x
+}
+
+const NONE: u32 = u32::MAX;
+
+/// Sews `kept` into shells, largest first.
+pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, BooleanError> {
+    let open = || BooleanError::Unresolved {
+        what: "the kept pieces do not close",
+    };
+    let nh = kept.len() * 3;
+    let from = |h: usize| kept[h / 3].tri[h % 3];
+    let to = |h: usize| kept[h / 3].tri[(h % 3 + 1) % 3];
+    // 1. Twins.
+    let mut by_edge: BTreeMap<(Pid, Pid), Vec<u32>> = BTreeMap::new();
+    for h in 0..nh {
+        by_edge.entry((from(h), to(h))).or_default().push(h as u32);
+    }
+    let mut twin = vec![NONE; nh];
+    for (&(p, q), outs) in &by_edge {
+        if p > q {
+            continue;
+        }
+        let ins = by_edge.get(&(q, p)).ok_or_else(open)?;
+        if ins.len() != outs.len() {
+            return Err(open());
+        }
+        if outs.len() == 1 {
+            twin[outs[0] as usize] = ins[0];
+            twin[ins[0] as usize] = outs[0];
+            continue;
+        }
+        let mut ins_left: Vec<u32> = ins.clone();
+        let mut outs_left: Vec<u32> = Vec::new();
+        for &o in outs {
+            let op = kept[o as usize / 3].source.operand;
+            if let Some(k) = ins_left
+                .iter()
+                .position(|&i| kept[i as usize / 3].source.operand == op)
+            {
+                let i = ins_left.remove(k);
+                twin[o as usize] = i;
+                twin[i as usize] = o;
+            } else {
+                outs_left.push(o);
+            }
+        }
+        for (o, i) in outs_left.into_iter().zip(ins_left) {
+            twin[o as usize] = i;
+            twin[i as usize] = o;
+        }
+    }
+    let next = |h: usize| h - h % 3 + (h % 3 + 1) % 3;
+    let prev = |h: usize| h - h % 3 + (h % 3 + 2) % 3;
+    // 2. One vertex per fan: corner h (the origin of half-edge h) gets a vertex index.
+    let mut vertex_of = vec![NONE; nh];
+    let mut locus: Vec<Pid> = Vec::new();
+    for h0 in 0..nh {
+        if vertex_of[h0] != NONE {
+            continue;
+        }
+        let v = locus.len() as u32;
+        locus.push(from(h0));
+        let mut h = h0;
+        loop {
+            vertex_of[h] = v;
+            // The next outgoing half-edge about the same point.
+            h = twin[prev(h)] as usize;
+            if h == h0 || vertex_of[h] != NONE {
+                break;
+            }
+        }
+    }
+    // 3. Shells.
+    let nt = kept.len();
+    let mut parent: Vec<u32> = (0..nt as u32).collect();
+    for (h, &t) in twin.iter().enumerate() {
+        let (a, b) = (find(&mut parent, (h / 3) as u32), find(&mut parent, t / 3));
+        if a != b {
+            parent[a.max(b) as usize] = a.min(b);
+        }
+    }
+    let mut shells_of: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    for t in 0..nt as u32 {
+        let r = find(&mut parent, t);
+        shells_of.entry(r).or_default().push(t);
+    }
+    // 4. Faces, per shell.
+    let mut region = vec![NONE; nt];
+    let mut shells = Vec::with_capacity(shells_of.len());
+    for tris in shells_of.values() {
+        let mut faces: Vec<(Vec<u32>, Source)> = Vec::new();
+        for &t in tris {
+            if region[t as usize] != NONE {
+                continue;
+            }
+            let id = faces.len() as u32;
+            let ring = grow(kept, &twin, &vertex_of, &mut region, t, id, next);
+            faces.push((ring, kept[t as usize].source));
+        }
+        shells.push(finish(pts, &locus, faces));
+    }
+    shells.sort_by_key(|s: &Shell| std::cmp::Reverse(s.faces.len()));
+    Ok(shells)
+}
+
+/// Grows the region of piece `seed` across edges shared with pieces of the same input
+/// face, keeping it a disc; returns its boundary as vertex indices, counter-clockwise.
+fn grow(
+    kept: &[Kept],
+    twin: &[u32],
+    vertex_of: &[u32],
+    region: &mut [u32],
+    seed: u32,
+    id: u32,
+    next: impl Fn(usize) -> usize,
+) -> Vec<u32> {
+    let source = kept[seed as usize].source;
+    region[seed as usize] = id;
+    let s = seed as usize * 3;
+    // The boundary: half-edge → its successor and predecessor along the region's rim.
+    let mut succ: HashMap<usize, usize> = HashMap::new();
+    let mut pred: HashMap<usize, usize> = HashMap::new();
+    let mut on_rim: HashMap<u32, u32> = HashMap::new();
+    for k in 0..3 {
+        succ.insert(s + k, s + (k + 1) % 3);
+        pred.insert(s + (k + 1) % 3, s + k);
+        *on_rim.entry(vertex_of[s + k]).or_default() += 1;
+    }
+    let mut start = s;
+    loop {
+        let mut grew = false;
+        let mut rim: Vec<usize> = succ.keys().copied().collect();
+        rim.sort_unstable();
+        for h in rim {
+            if !succ.contains_key(&h) {
+                continue;
+            }
+            let g = twin[h] as usize;
+            let u = g / 3;
+            if region[u] != NONE || kept[u].source != source {
+                continue;
+            }
+            let g1 = next(g);
+            let g2 = next(g1);
+            let (ph, nh) = (pred[&h], succ[&h]);
+            if ph == twin[g1] as usize && nh == twin[g2] as usize {
+                continue;
+            }
+            if ph == twin[g1] as usize {
+                // The piece fills the notch before h: ph and h leave, g2 joins.
+                let pp = pred[&ph];
+                for x in [ph, h] {
+                    succ.remove(&x);
+                    pred.remove(&x);
+                }
+                *on_rim.get_mut(&vertex_of[h]).expect("on the rim") -= 1;
+                *on_rim.get_mut(&vertex_of[ph]).expect("on the rim") -= 1;
+                *on_rim.entry(vertex_of[g2]).or_default() += 1;
+                succ.insert(pp, g2);
+                pred.insert(g2, pp);
+                succ.insert(g2, nh);
+                pred.insert(nh, g2);
+            } else if nh == twin[g2] as usize {
+                // The piece fills the notch after h: h and nh leave, g1 joins.
+                let nn = succ[&nh];
+                for x in [h, nh] {
+                    succ.remove(&x);
+                    pred.remove(&x);
+                }
+                *on_rim.get_mut(&vertex_of[h]).expect("on the rim") -= 1;
+                *on_rim.get_mut(&vertex_of[nh]).expect("on the rim") -= 1;
+                *on_rim.entry(vertex_of[g1]).or_default() += 1;
+                succ.insert(ph, g1);
+                pred.insert(g1, ph);
+                succ.insert(g1, nn);
+                pred.insert(nn, g1);
+            } else {
+                let w = vertex_of[g2];
+                if on_rim.get(&w).copied().unwrap_or(0) > 0 {
+                    continue; // it would pinch the region at w
+                }
+                succ.remove(&h);
+                pred.remove(&h);
+                succ.insert(ph, g1);
+                pred.insert(g1, ph);
+                succ.insert(g1, g2);
+                pred.insert(g2, g1);
+                succ.insert(g2, nh);
+                pred.insert(nh, g2);
+                *on_rim.entry(w).or_default() += 1;
+            }
+            region[u] = id;
+            grew = true;
+        }
+        if !grew {
+            break;
+        }
+    }
+    if !succ.contains_key(&start) {
+        start = *succ.keys().min().expect("a region has a rim");
+    }
+    let mut ring = Vec::with_capacity(succ.len());
+    let mut h = start;
+    loop {
+        ring.push(vertex_of[h]);
+        h = succ[&h];
+        if h == start || ring.len() > succ.len() {
+            break;
+        }
+    }
+    ring
+}
+
+/// Drops vertices where only two faces meet, numbers the shell's vertices and rounds
+/// their loci.
+fn finish(pts: &Points, locus: &[Pid], faces: Vec<(Vec<u32>, Source)>) -> Shell {
+    let mut faces_at: HashMap<u32, Vec<usize>> = HashMap::new();
+    for (fi, (ring, _)) in faces.iter().enumerate() {
+        for &v in ring {
+            faces_at.entry(v).or_default().push(fi);
+        }
+    }
+    let mut index: HashMap<u32, u32> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut out_faces = Vec::with_capacity(faces.len());
+    let mut sources = Vec::with_capacity(faces.len());
+    // A vertex is dropped only if both its faces keep three vertices or more.
+    let mut keep_count: Vec<usize> = faces.iter().map(|(r, _)| r.len()).collect();
+    let mut dropped: HashMap<u32, bool> = HashMap::new();
+    let mut candidates: Vec<(u32, usize, usize)> = faces_at
+        .iter()
+        .filter(|(_, f)| f.len() == 2 && f[0] != f[1])
+        .map(|(&v, f)| (v, f[0], f[1]))
+        .collect();
+    candidates.sort_unstable();
+    for (v, fi, fj) in candidates {
+        let ok = keep_count[fi] > 3 && keep_count[fj] > 3;
+        dropped.insert(v, ok);
+        if ok {
+            keep_count[fi] -= 1;
+            keep_count[fj] -= 1;
+        }
+    }
+    for (ring, source) in faces {
+        let mut f = Vec::with_capacity(ring.len());
+        for v in ring {
+            if dropped.get(&v).copied().unwrap_or(false) {
+                continue;
+            }
+            let i = *index.entry(v).or_insert_with(|| {
+                positions.push(pts.rounded(locus[v as usize]));
+                (positions.len() - 1) as u32
+            });
+            f.push(i);
+        }
+        out_faces.push(f);
+        sources.push(source);
+    }
+    Shell {
+        positions,
+        faces: out_faces,
+        sources,
+    }
+}

@@ -1,0 +1,330 @@
+//! Exact signs of polynomials in f64 inputs: a filter in f64 with a running error
+//! bound, and exact dyadic arithmetic behind it.
+//!
+//! Every predicate of the boolean is a polynomial in input coordinates (all f64, so all
+//! dyadic rationals). It is written once, generic over [`Ring`], and evaluated first in
+//! [`Fx`] (f64 with a bound on the absolute error of the value), which answers when the
+//! value is farther from zero than its bound; otherwise in [`Dy`] (an arbitrary-precision
+//! integer times a power of two), which is exact. The answer is therefore always the
+//! sign of the exact value.
+
+use std::ops::{Add, Mul, Neg, Sub};
+
+use num_bigint::{BigInt, Sign};
+use num_traits::{Signed, ToPrimitive, Zero};
+
+/// The numbers a predicate is evaluated in: a commutative ring holding every f64.
+pub(crate) trait Ring:
+    Clone + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
+{
+    /// The f64 `x`, exactly (precondition: finite).
+    fn of(x: f64) -> Self;
+}
+
+/// Unit roundoff of f64.
+const U: f64 = f64::EPSILON / 2.0;
+/// Growth applied to every bound, covering the rounding of the bound's own arithmetic.
+const GROW: f64 = 1.0 + 8.0 * U;
+/// An absolute floor on every bound, covering underflow.
+const FLOOR: f64 = f64::MIN_POSITIVE * 64.0;
+
+/// An f64 value `v` whose exact counterpart lies within `e` of it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Fx {
+    pub v: f64,
+    pub e: f64,
+}
+
+impl Fx {
+    /// The sign of the exact value, when the bound decides it: −1, 0 (only for an exact
+    /// zero with no error) or 1.
+    #[inline]
+    pub fn sign(self) -> Option<i8> {
+        if !self.v.is_finite() || !self.e.is_finite() {
+            None
+        } else if self.v > self.e {
+            Some(1)
+        } else if -self.v > self.e {
+            Some(-1)
+        } else if self.v == 0.0 && self.e == 0.0 {
+            Some(0)
+        } else {
+            None
+        }
+    }
+}
+
+impl Ring for Fx {
+    #[inline]
+    fn of(x: f64) -> Self {
+        Fx { v: x, e: 0.0 }
+    }
+}
+
+impl Add for Fx {
+    type Output = Fx;
+    #[inline]
+    fn add(self, o: Fx) -> Fx {
+        let v = self.v + o.v;
+        let e = if self.e == 0.0 && o.e == 0.0 && two_sum_error(self.v, o.v, v) == 0.0 {
+            0.0
+        } else {
+            (self.e + o.e + v.abs() * U + FLOOR) * GROW
+        };
+        Fx { v, e }
+    }
+}
+
+impl Sub for Fx {
+    type Output = Fx;
+    #[inline]
+    fn sub(self, o: Fx) -> Fx {
+        self + (-o)
+    }
+}
+
+impl Neg for Fx {
+    type Output = Fx;
+    #[inline]
+    fn neg(self) -> Fx {
+        Fx {
+            v: -self.v,
+            e: self.e,
+        }
+    }
+}
+
+impl Mul for Fx {
+    type Output = Fx;
+    #[inline]
+    fn mul(self, o: Fx) -> Fx {
+        let v = self.v * o.v;
+        let exact = self.e == 0.0
+            && o.e == 0.0
+            && (v == 0.0 || v.abs() >= f64::MIN_POSITIVE * 2f64.powi(54))
+            && two_product_error(self.v, o.v, v) == 0.0;
+        let e = if exact {
+            0.0
+        } else {
+            (self.v.abs() * o.e + o.v.abs() * self.e + self.e * o.e + v.abs() * U + FLOOR) * GROW
+        };
+        Fx { v, e }
+    }
+}
+
+/// The rounding error of `v = a + b` (Knuth's TwoSum): exact.
+#[inline]
+fn two_sum_error(a: f64, b: f64, v: f64) -> f64 {
+    let bv = v - a;
+    let av = v - bv;
+    (a - av) + (b - bv)
+}
+
+/// Dekker's split of `a` into two halves of 26 bits each.
+#[inline]
+fn split(a: f64) -> (f64, f64) {
+    let c = 134_217_729.0 * a; // 2^27 + 1
+    let hi = c - (c - a);
+    (hi, a - hi)
+}
+
+/// The rounding error of `v = a · b` (Dekker's TwoProduct): exact barring overflow
+/// and underflow, which the caller rules out.
+#[inline]
+fn two_product_error(a: f64, b: f64, v: f64) -> f64 {
+    if !v.is_finite() || a.abs() > 1e290 || b.abs() > 1e290 {
+        return f64::NAN;
+    }
+    let (ah, al) = split(a);
+    let (bh, bl) = split(b);
+    al * bl - (((v - ah * bh) - al * bh) - ah * bl)
+}
+
+/// An exact dyadic rational `m · 2^x`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct Dy {
+    m: BigInt,
+    x: i32,
+}
+
+impl Dy {
+    /// −1, 0 or 1.
+    pub fn sign(&self) -> i8 {
+        match self.m.sign() {
+            Sign::Minus => -1,
+            Sign::NoSign => 0,
+            Sign::Plus => 1,
+        }
+    }
+
+    /// Both numbers over one power of two: (self's mantissa, other's mantissa, exponent).
+    fn aligned(&self, o: &Dy) -> (BigInt, BigInt, i32) {
+        if self.x <= o.x {
+            (self.m.clone(), &o.m << ((o.x - self.x) as usize), self.x)
+        } else {
+            (&self.m << ((self.x - o.x) as usize), o.m.clone(), o.x)
+        }
+    }
+}
+
+impl Ring for Dy {
+    fn of(x: f64) -> Self {
+        debug_assert!(x.is_finite());
+        if x == 0.0 {
+            return Dy {
+                m: BigInt::zero(),
+                x: 0,
+            };
+        }
+        let bits = x.to_bits();
+        let exp = ((bits >> 52) & 0x7ff) as i32;
+        let frac = bits & ((1u64 << 52) - 1);
+        let (mant, e) = if exp == 0 {
+            (frac, -1074)
+        } else {
+            (frac | (1u64 << 52), exp - 1075)
+        };
+        let m = BigInt::from(mant);
+        Dy {
+            m: if x < 0.0 { -m } else { m },
+            x: e,
+        }
+    }
+}
+
+impl Add for Dy {
+    type Output = Dy;
+    fn add(self, o: Dy) -> Dy {
+        let (a, b, x) = self.aligned(&o);
+        Dy { m: a + b, x }
+    }
+}
+
+impl Sub for Dy {
+    type Output = Dy;
+    fn sub(self, o: Dy) -> Dy {
+        let (a, b, x) = self.aligned(&o);
+        Dy { m: a - b, x }
+    }
+}
+
+impl Neg for Dy {
+    type Output = Dy;
+    fn neg(self) -> Dy {
+        Dy {
+            m: -self.m,
+            x: self.x,
+        }
+    }
+}
+
+impl Mul for Dy {
+    type Output = Dy;
+    fn mul(self, o: Dy) -> Dy {
+        Dy {
+            m: self.m * o.m,
+            x: self.x + o.x,
+        }
+    }
+}
+
+/// The f64 nearest to `num / den` (ties to even). Precondition: `den` is not zero.
+pub(crate) fn quotient_to_f64(num: &Dy, den: &Dy) -> f64 {
+    if num.m.is_zero() {
+        return 0.0;
+    }
+    let negative = (num.sign() < 0) != (den.sign() < 0);
+    let (n, d) = (num.m.abs(), den.m.abs());
+    // Scale the numerator so the integer quotient has at least 66 significant bits.
+    let shift = (d.bits() as i64 - n.bits() as i64 + 66).max(0) as usize;
+    let scaled = n << shift;
+    let (q, r) = (&scaled / &d, &scaled % &d);
+    // A sticky bit below the 64 bits the conversion keeps decides halfway cases.
+    let q = if r.is_zero() {
+        q
+    } else {
+        (q << 1usize) | BigInt::from(1)
+    };
+    let extra = if r.is_zero() { 0 } else { 1 };
+    let top = q.bits() as i64;
+    let drop = (top - 64).max(0);
+    let low_nonzero = drop > 0 && q.trailing_zeros().is_some_and(|t| (t as i64) < drop);
+    let mut mant = (&q >> (drop as usize)).to_u64().unwrap_or(u64::MAX);
+    if low_nonzero {
+        mant |= 1;
+    }
+    // mant · 2^(drop − shift − extra + num.x − den.x), mant < 2^64: `as f64` rounds to
+    // nearest even, and the sticky bit keeps that rounding correct.
+    let exp = drop - shift as i64 - extra + num.x as i64 - den.x as i64;
+    let value = scale(mant as f64, exp);
+    if negative { -value } else { value }
+}
+
+/// `x · 2^e`, exact unless the result overflows or underflows.
+fn scale(mut x: f64, mut e: i64) -> f64 {
+    while e > 1000 {
+        x *= 2f64.powi(1000);
+        e -= 1000;
+    }
+    while e < -1000 {
+        x *= 2f64.powi(-1000);
+        e += 1000;
+    }
+    x * 2f64.powi(e as i32)
+}
+
+/// A polynomial in input coordinates, written once over [`Ring`].
+pub(crate) trait Poly {
+    /// The polynomial's value in `R`.
+    fn eval<R: Ring>(&self) -> R;
+
+    /// The sign of the exact value: the filter's answer when it is certain, else the
+    /// exact arithmetic's.
+    fn sign(&self) -> i8 {
+        match self.eval::<Fx>().sign() {
+            Some(s) => s,
+            None => self.eval::<Dy>().sign(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn det2<R: Ring>(a: f64, b: f64, c: f64, d: f64) -> R {
+        R::of(a) * R::of(d) - R::of(b) * R::of(c)
+    }
+
+    #[test]
+    fn the_filter_defers_a_cancellation_and_the_exact_sign_is_found() {
+        // (1 + 2^-52)(1 − 2^-52) − 1 = −2^-104: f64 rounds the product to 1.
+        let a = 1.0 + f64::EPSILON;
+        let b = 1.0 - f64::EPSILON;
+        let f: Fx = det2(a, 1.0, 1.0, b);
+        assert_eq!(f.v, 0.0);
+        assert_eq!(f.sign(), None);
+        let d: Dy = det2(a, 1.0, 1.0, b);
+        assert_eq!(d.sign(), -1);
+    }
+
+    #[test]
+    fn the_filter_answers_clear_signs() {
+        let f: Fx = det2(3.0, 1.0, 1.0, 2.0);
+        assert_eq!(f.sign(), Some(1));
+        let z: Fx = det2(2.0, 1.0, 4.0, 2.0);
+        assert_eq!(z.sign(), Some(0));
+    }
+
+    #[test]
+    fn quotients_round_to_nearest() {
+        let q = |a: f64, b: f64| quotient_to_f64(&Dy::of(a), &Dy::of(b));
+        assert_eq!(q(1.0, 3.0), 1.0 / 3.0);
+        assert_eq!(q(-2.0, 3.0), -2.0 / 3.0);
+        assert_eq!(q(7.0, -1024.0), -7.0 / 1024.0);
+        assert_eq!(q(0.1, 0.7), 0.1 / 0.7);
+        assert_eq!(q(1e-300, 3e10), 1e-300 / 3e10);
+        let third = Dy::of(1.0) * Dy::of(1.0) + Dy::of(0.0);
+        assert_eq!(quotient_to_f64(&third, &Dy::of(4.0)), 0.25);
+    }
+}

@@ -1,0 +1,273 @@
+//! A triangle cut along the traces of the other surface: a constrained triangulation
+//! of its corners, the points on its edges, and the traces' ends, built with exact
+//! orientations in the projection along its dominant normal axis.
+//!
+//! Points are inserted one by one (splitting the triangle, or the two triangles, that
+//! hold each), then each trace is recovered by flipping the edges that cross it (Sloan's
+//! method), after cutting it at any point that lies on it. Traces do not cross each
+//! other (the surfaces do not cross themselves); if they do, the cut is refused.
+
+use std::collections::HashMap;
+
+use super::exact::{Poly, Ring};
+use super::intersect::{EdgeKey, edge_key};
+use super::point::{Def, Pid, Points};
+
+/// Why a triangle could not be cut.
+#[derive(Debug)]
+pub(crate) struct CutError;
+
+/// The axis to project a triangle along: one whose projection keeps its area.
+pub(crate) fn dominant_axis(pts: &Points, tri: [Pid; 3]) -> u8 {
+    let [a, b, c] = tri.map(|p| pts.approx[p as usize]);
+    let n = (b - a).cross(c - a).abs();
+    let mut order = [0u8, 1, 2];
+    order.sort_by(|&i, &j| n[j as usize].total_cmp(&n[i as usize]));
+    order
+        .into_iter()
+        .find(|&k| pts.orient2d(k, tri) != 0)
+        .unwrap_or(order[0])
+}
+
+/// A cut triangle: its pieces (counter-clockwise as the triangle) and the edges among
+/// them that lie on a trace.
+#[derive(Debug, Default)]
+pub(crate) struct Cut {
+    pub pieces: Vec<[Pid; 3]>,
+    pub traced: Vec<EdgeKey>,
+}
+
+struct Tri2 {
+    pts: Vec<[Pid; 3]>,
+    alive: Vec<bool>,
+    /// Directed edge → the triangle holding it.
+    edge: HashMap<(Pid, Pid), usize>,
+}
+
+impl Tri2 {
+    fn add(&mut self, t: [Pid; 3]) {
+        let i = self.pts.len();
+        self.pts.push(t);
+        self.alive.push(true);
+        for k in 0..3 {
+            self.edge.insert((t[k], t[(k + 1) % 3]), i);
+        }
+    }
+
+    fn kill(&mut self, i: usize) {
+        self.alive[i] = false;
+        let t = self.pts[i];
+        for k in 0..3 {
+            if self.edge.get(&(t[k], t[(k + 1) % 3])) == Some(&i) {
+                self.edge.remove(&(t[k], t[(k + 1) % 3]));
+            }
+        }
+    }
+}
+
+/// Cuts triangle `tri` (input points) by the points `extra` (on its edges or inside
+/// it) and the traces `segs` (between its corners and those points).
+pub(crate) fn cut(
+    pts: &Points,
+    tri: [Pid; 3],
+    extra: &[Pid],
+    segs: &[[Pid; 2]],
+) -> Result<Cut, CutError> {
+    let axis = dominant_axis(pts, tri);
+    let sense = pts.orient2d(axis, tri);
+    if sense == 0 {
+        return Err(CutError);
+    }
+    let orient = |p: Pid, q: Pid, r: Pid| pts.orient2d(axis, [p, q, r]) * sense;
+    let mut t = Tri2 {
+        pts: Vec::new(),
+        alive: Vec::new(),
+        edge: HashMap::new(),
+    };
+    t.add(tri);
+    let mut verts: Vec<Pid> = tri.to_vec();
+    for &p in extra {
+        if verts.contains(&p) {
+            continue;
+        }
+        insert_point(&mut t, &orient, p)?;
+        verts.push(p);
+    }
+    let mut traced: Vec<EdgeKey> = Vec::new();
+    for &[p, q] in segs {
+        insert_segment(pts, &mut t, &orient, &verts, p, q, &mut traced, 0)?;
+    }
+    let pieces = t
+        .pts
+        .iter()
+        .zip(&t.alive)
+        .filter(|(_, a)| **a)
+        .map(|(p, _)| *p)
+        .collect();
+    Ok(Cut { pieces, traced })
+}
+
+fn insert_point(
+    t: &mut Tri2,
+    orient: &impl Fn(Pid, Pid, Pid) -> i8,
+    p: Pid,
+) -> Result<(), CutError> {
+    for i in 0..t.pts.len() {
+        if !t.alive[i] {
+            continue;
+        }
+        let [a, b, c] = t.pts[i];
+        let o = [orient(a, b, p), orient(b, c, p), orient(c, a, p)];
+        if o.iter().any(|&s| s < 0) {
+            continue;
+        }
+        let zeros = o.iter().filter(|&&s| s == 0).count();
+        match zeros {
+            0 => {
+                t.kill(i);
+                t.add([a, b, p]);
+                t.add([b, c, p]);
+                t.add([c, a, p]);
+                return Ok(());
+            }
+            1 => {
+                let k = o.iter().position(|&s| s == 0).unwrap_or(0);
+                let tri = t.pts[i];
+                let (u, v, w) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+                let other = t.edge.get(&(v, u)).copied();
+                t.kill(i);
+                t.add([u, p, w]);
+                t.add([p, v, w]);
+                if let Some(j) = other {
+                    let oj = t.pts[j];
+                    let m = (0..3).find(|&m| oj[m] == v).unwrap_or(0);
+                    let x = oj[(m + 2) % 3];
+                    t.kill(j);
+                    t.add([v, p, x]);
+                    t.add([p, u, x]);
+                }
+                return Ok(());
+            }
+            _ => return Ok(()), // a vertex already
+        }
+    }
+    Err(CutError)
+}
+
+/// Whether `w`, on the line through `p` and `q`, lies strictly between them.
+fn strictly_between(pts: &Points, p: Pid, q: Pid, w: Pid) -> bool {
+    let (dp, dq, dw) = (
+        pts.defs[p as usize],
+        pts.defs[q as usize],
+        pts.defs[w as usize],
+    );
+    for k in 0..3 {
+        let s = coord_cmp(pts, k, dp, dq);
+        if s != 0 {
+            return coord_cmp(pts, k, dp, dw) == s && coord_cmp(pts, k, dw, dq) == s;
+        }
+    }
+    false
+}
+
+#[allow(clippy::too_many_arguments)]
+fn insert_segment(
+    pts: &Points,
+    t: &mut Tri2,
+    orient: &impl Fn(Pid, Pid, Pid) -> i8,
+    verts: &[Pid],
+    p: Pid,
+    q: Pid,
+    traced: &mut Vec<EdgeKey>,
+    depth: usize,
+) -> Result<(), CutError> {
+    if p == q {
+        return Ok(());
+    }
+    if depth > verts.len() + 2 {
+        return Err(CutError);
+    }
+    // Cut the trace at any vertex on it.
+    for &w in verts {
+        if w != p && w != q && orient(p, q, w) == 0 && strictly_between(pts, p, q, w) {
+            insert_segment(pts, t, orient, verts, p, w, traced, depth + 1)?;
+            return insert_segment(pts, t, orient, verts, w, q, traced, depth + 1);
+        }
+    }
+    let mut rounds = 0usize;
+    loop {
+        if t.edge.contains_key(&(p, q)) || t.edge.contains_key(&(q, p)) {
+            traced.push(edge_key(p, q));
+            return Ok(());
+        }
+        rounds += 1;
+        if rounds > 4 * t.pts.len() + 16 {
+            return Err(CutError);
+        }
+        // Flip one crossing edge whose quadrilateral is convex.
+        let mut flipped = false;
+        let edges: Vec<((Pid, Pid), usize)> = t.edge.iter().map(|(k, v)| (*k, *v)).collect();
+        let mut edges = edges;
+        edges.sort_unstable();
+        for ((u, v), i) in edges {
+            if u > v || !t.alive[i] {
+                continue;
+            }
+            let Some(&j) = t.edge.get(&(v, u)) else {
+                continue;
+            };
+            if orient(p, q, u) * orient(p, q, v) >= 0 || orient(u, v, p) * orient(u, v, q) >= 0 {
+                continue;
+            }
+            if traced.contains(&edge_key(u, v)) {
+                return Err(CutError); // two traces cross
+            }
+            let x = third(t.pts[i], u, v);
+            let y = third(t.pts[j], v, u);
+            // Convex: the other diagonal crosses this one.
+            if orient(x, y, u) * orient(x, y, v) >= 0 {
+                continue;
+            }
+            t.kill(i);
+            t.kill(j);
+            // (u, v, x) and (v, u, y) become (x, y, v)... keeping counter-clockwise.
+            t.add([u, y, x]);
+            t.add([v, x, y]);
+            flipped = true;
+            break;
+        }
+        if !flipped {
+            return Err(CutError);
+        }
+    }
+}
+
+/// The vertex of triangle `t` other than the ends of its edge `u → v`.
+fn third(t: [Pid; 3], u: Pid, v: Pid) -> Pid {
+    t.into_iter().find(|&x| x != u && x != v).unwrap_or(u)
+}
+
+/// The sign of `q_k − p_k`.
+pub(crate) fn coord_cmp(pts: &Points, k: usize, p: Def, q: Def) -> i8 {
+    if p == q {
+        return 0;
+    }
+    let w = pts.w_sign_def(p) * pts.w_sign_def(q);
+    CoordDiff { pts, k, p, q }.sign() * w
+}
+
+/// `q_k W_p − p_k W_q`.
+struct CoordDiff<'a> {
+    pts: &'a Points,
+    k: usize,
+    p: Def,
+    q: Def,
+}
+
+impl Poly for CoordDiff<'_> {
+    fn eval<R: Ring>(&self) -> R {
+        let hp = self.pts.homog::<R>(self.p);
+        let hq = self.pts.homog::<R>(self.q);
+        hq[self.k].clone() * hp[3].clone() - hp[self.k].clone() * hq[3].clone()
+    }
+}

@@ -1,0 +1,172 @@
+//! The boolean on small cases whose answers are known exactly.
+
+use glam::{DAffine3, DQuat, DVec3};
+
+use super::*;
+use crate::model::check::{Violation, check_solid};
+use crate::model::ids::Serials;
+use crate::model::solids::{box_solid, cylinder};
+
+fn boxed(s: &mut Serials, size: DVec3) -> Body {
+    box_solid(s, size).unwrap()
+}
+
+fn at(body: &Body, place: DAffine3) -> Operand<'_> {
+    Operand { body, place }
+}
+
+fn moved(v: DVec3) -> DAffine3 {
+    DAffine3::from_translation(v)
+}
+
+/// Builds every shell, checks it, and returns the bodies.
+fn built(sol: &Solution) -> Vec<Body> {
+    let mut s = Serials::new();
+    sol.shells
+        .iter()
+        .map(|sh| {
+            let b = Body::from_polygons(&mut s, &sh.positions, &sh.faces)
+                .unwrap_or_else(|e| panic!("shell does not build: {e}\n{sh:?}"));
+            let r = check_solid(&b, 1e-9);
+            assert!(
+                r.violations
+                    .iter()
+                    .all(|v| matches!(v, Violation::Inward { .. })),
+                "{r}"
+            );
+            assert_eq!(sh.sources.len(), sh.faces.len());
+            b
+        })
+        .collect()
+}
+
+fn volume(sol: &Solution) -> f64 {
+    built(sol).iter().map(|b| b.volume()).sum()
+}
+
+#[test]
+fn two_overlapping_boxes() {
+    let mut s = Serials::new();
+    let a = boxed(&mut s, DVec3::splat(2.0));
+    let b = boxed(&mut s, DVec3::splat(2.0));
+    let (pa, pb) = (moved(DVec3::ZERO), moved(DVec3::new(1.0, 1.0, 1.0)));
+    let i = boolean(at(&a, pa), at(&b, pb), Op::Intersection).unwrap();
+    assert_eq!(i.shells.len(), 1);
+    assert_eq!(i.shells[0].faces.len(), 6, "{:?}", i.shells[0]);
+    assert_eq!(i.shells[0].positions.len(), 8);
+    assert_eq!(volume(&i), 1.0);
+    let u = boolean(at(&a, pa), at(&b, pb), Op::Union).unwrap();
+    assert_eq!(u.shells.len(), 1);
+    assert_eq!(volume(&u), 15.0);
+    assert_eq!(u.shells[0].faces.len(), 12);
+    let d = boolean(at(&a, pa), at(&b, pb), Op::Difference).unwrap();
+    assert_eq!(volume(&d), 7.0);
+    assert_eq!(d.shells[0].faces.len(), 9);
+}
+
+#[test]
+fn a_body_with_itself() {
+    let mut s = Serials::new();
+    let a = boxed(&mut s, DVec3::new(1.0, 2.0, 3.0));
+    let p = moved(DVec3::ZERO);
+    for op in [Op::Union, Op::Intersection] {
+        let r = boolean(at(&a, p), at(&a, p), op).unwrap();
+        assert_eq!(r.shells.len(), 1);
+        assert_eq!(r.shells[0].faces.len(), 6);
+        assert_eq!(volume(&r), 6.0);
+    }
+    let d = boolean(at(&a, p), at(&a, p), Op::Difference).unwrap();
+    assert!(d.shells.is_empty());
+}
+
+#[test]
+fn boxes_sharing_a_face_edge_or_vertex() {
+    let mut s = Serials::new();
+    let a = boxed(&mut s, DVec3::ONE);
+    for (offset, pieces) in [
+        (DVec3::X, 1),
+        (DVec3::new(1.0, 1.0, 0.0), 2),
+        (DVec3::ONE, 2),
+        (DVec3::new(1.0, 0.5, 0.0), 1),
+    ] {
+        let u = boolean(at(&a, moved(DVec3::ZERO)), at(&a, moved(offset)), Op::Union).unwrap();
+        assert_eq!(u.shells.len(), pieces, "union at {offset}");
+        assert_eq!(volume(&u), 2.0, "union at {offset}");
+        let i = boolean(
+            at(&a, moved(DVec3::ZERO)),
+            at(&a, moved(offset)),
+            Op::Intersection,
+        )
+        .unwrap();
+        assert!(i.shells.is_empty(), "touching bodies share no volume");
+        let d = boolean(
+            at(&a, moved(DVec3::ZERO)),
+            at(&a, moved(offset)),
+            Op::Difference,
+        )
+        .unwrap();
+        assert_eq!(volume(&d), 1.0);
+        assert_eq!(d.shells.len(), 1);
+    }
+}
+
+#[test]
+fn a_cylinder_drills_a_hole() {
+    let mut s = Serials::new();
+    let a = boxed(&mut s, DVec3::new(4.0, 4.0, 1.0));
+    let c = cylinder(&mut s, 1.0, 3.0, 16).unwrap();
+    let d = boolean(
+        at(&a, moved(DVec3::ZERO)),
+        at(&c, moved(DVec3::ZERO)),
+        Op::Difference,
+    )
+    .unwrap();
+    let bodies = built(&d);
+    assert_eq!(bodies.len(), 1);
+    assert_eq!(bodies[0].handles(), 1);
+    let expected = 16.0 - c.volume() / 3.0;
+    assert!((bodies[0].volume() - expected).abs() < 1e-12);
+}
+
+#[test]
+fn rotated_and_everted_operands() {
+    let mut s = Serials::new();
+    let a = boxed(&mut s, DVec3::splat(2.0));
+    let r = DAffine3::from_rotation_translation(
+        DQuat::from_rotation_z(0.3) * DQuat::from_rotation_x(0.2),
+        DVec3::new(0.5, 0.2, 0.1),
+    );
+    let i = boolean(at(&a, moved(DVec3::ZERO)), at(&a, r), Op::Intersection).unwrap();
+    let u = boolean(at(&a, moved(DVec3::ZERO)), at(&a, r), Op::Union).unwrap();
+    let d = boolean(at(&a, moved(DVec3::ZERO)), at(&a, r), Op::Difference).unwrap();
+    let (vi, vu, vd) = (volume(&i), volume(&u), volume(&d));
+    assert!((vi + vu - 16.0).abs() < 1e-12, "{vi} + {vu}");
+    assert!((vd - (8.0 - vi)).abs() < 1e-12, "{vd}");
+    // A ∩ EVERT(B) = A − B.
+    let mut e = a.clone();
+    e.evert();
+    let ie = boolean(at(&a, moved(DVec3::ZERO)), at(&e, r), Op::Intersection).unwrap();
+    assert!((volume(&ie) - vd).abs() < 1e-12);
+}
+
+#[test]
+fn bad_operands_are_refused() {
+    let mut s = Serials::new();
+    let a = boxed(&mut s, DVec3::ONE);
+    let (lamina, _, _) = Body::seminal(&mut s, DVec3::ZERO);
+    let e = boolean(
+        at(&a, moved(DVec3::ZERO)),
+        at(&lamina, moved(DVec3::ZERO)),
+        Op::Union,
+    );
+    assert!(
+        matches!(
+            e,
+            Err(BooleanError::NotClosed {
+                operand: Which::B,
+                ..
+            })
+        ),
+        "{e:?}"
+    );
+}
