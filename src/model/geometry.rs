@@ -82,10 +82,17 @@ impl Body {
     /// Newell's area vector of face `f`: its direction is the outward normal and its
     /// length twice the face's area. Right for concave and slightly non-planar faces.
     pub fn newell(&self, f: FaceId) -> DVec3 {
+        // Summed about the face's first vertex, so a long thin face far from the origin
+        // keeps its normal (the terms are small, and exactly zero along an axis the face
+        // is flat in).
+        let origin = self
+            .face_uses(f)
+            .next()
+            .map_or(DVec3::ZERO, |u| self.position(self.origin(u)));
         let mut n = DVec3::ZERO;
         for u in self.face_uses(f) {
-            let a = self.position(self.origin(u));
-            let b = self.position(self.dest(u));
+            let a = self.position(self.origin(u)) - origin;
+            let b = self.position(self.dest(u)) - origin;
             n += DVec3::new(
                 (a.y - b.y) * (a.z + b.z),
                 (a.z - b.z) * (a.x + b.x),

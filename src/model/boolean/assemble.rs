@@ -245,7 +245,19 @@ fn grow(
     ring
 }
 
-/// Drops vertices where only two faces meet, numbers the shell's vertices and rounds
+/// Whether vertex `v` of `ring` lies on the segment between its neighbours there
+/// (exactly: collinear in every coordinate projection).
+fn straight(pts: &Points, locus: &[Pid], ring: &[u32], v: u32) -> bool {
+    let n = ring.len();
+    let Some(i) = ring.iter().position(|&x| x == v) else {
+        return false;
+    };
+    let (u, w) = (ring[(i + n - 1) % n], ring[(i + 1) % n]);
+    let p = [u, v, w].map(|x| locus[x as usize]);
+    (0..3).all(|axis| pts.orient2d(axis, p) == 0)
+}
+
+/// Drops vertices where only two faces meet and the boundary runs straight through, numbers the shell's vertices and rounds
 /// their loci.
 fn finish(pts: &Points, locus: &[Pid], faces: Vec<(Vec<u32>, Source)>) -> Shell {
     let mut faces_at: HashMap<u32, Vec<usize>> = HashMap::new();
@@ -268,7 +280,7 @@ fn finish(pts: &Points, locus: &[Pid], faces: Vec<(Vec<u32>, Source)>) -> Shell 
         .collect();
     candidates.sort_unstable();
     for (v, fi, fj) in candidates {
-        let ok = keep_count[fi] > 3 && keep_count[fj] > 3;
+        let ok = keep_count[fi] > 3 && keep_count[fj] > 3 && straight(pts, locus, &faces[fi].0, v);
         dropped.insert(v, ok);
         if ok {
             keep_count[fi] -= 1;
@@ -290,9 +302,70 @@ fn finish(pts: &Points, locus: &[Pid], faces: Vec<(Vec<u32>, Source)>) -> Shell 
         out_faces.push(f);
         sources.push(source);
     }
+    let (positions, faces, sources) = collapse(positions, out_faces, sources);
     Shell {
         positions,
-        faces: out_faces,
+        faces,
         sources,
+        cavity_of: None,
     }
+}
+
+/// Merges the ends of every edge whose two distinct exact ends round to one locus, and
+/// drops the faces that leave fewer than three corners (slivers narrower than the f64
+/// grid, which rounding flattens into an edge).
+fn collapse(
+    positions: Vec<glam::DVec3>,
+    faces: Vec<Vec<u32>>,
+    sources: Vec<Source>,
+) -> (Vec<glam::DVec3>, Vec<Vec<u32>>, Vec<Source>) {
+    let short = faces.iter().any(|f| {
+        (0..f.len()).any(|k| positions[f[k] as usize] == positions[f[(k + 1) % f.len()] as usize])
+    });
+    if !short {
+        return (positions, faces, sources);
+    }
+    let mut parent: Vec<u32> = (0..positions.len() as u32).collect();
+    for f in &faces {
+        for k in 0..f.len() {
+            let (a, b) = (f[k], f[(k + 1) % f.len()]);
+            if positions[a as usize] == positions[b as usize] {
+                let (x, y) = (find(&mut parent, a), find(&mut parent, b));
+                if x != y {
+                    parent[x.max(y) as usize] = x.min(y);
+                }
+            }
+        }
+    }
+    let mut index: HashMap<u32, u32> = HashMap::new();
+    let mut out_pos = Vec::new();
+    let mut out_faces = Vec::new();
+    let mut out_sources = Vec::new();
+    for (f, src) in faces.into_iter().zip(sources) {
+        let mut ring: Vec<u32> = Vec::with_capacity(f.len());
+        for v in f {
+            let r = find(&mut parent, v);
+            if ring.last() != Some(&r) {
+                ring.push(r);
+            }
+        }
+        while ring.len() > 1 && ring.first() == ring.last() {
+            ring.pop();
+        }
+        if ring.len() < 3 {
+            continue;
+        }
+        let ring = ring
+            .into_iter()
+            .map(|r| {
+                *index.entry(r).or_insert_with(|| {
+                    out_pos.push(positions[r as usize]);
+                    (out_pos.len() - 1) as u32
+                })
+            })
+            .collect();
+        out_faces.push(ring);
+        out_sources.push(src);
+    }
+    (out_pos, out_faces, out_sources)
 }

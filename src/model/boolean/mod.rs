@@ -6,7 +6,8 @@
 use glam::{DAffine3, DVec3};
 
 use crate::model::body::Body;
-use crate::model::ids::Serial;
+use crate::model::ids::{Serial, Serials};
+use crate::model::solids::BuildError;
 
 /// Which boolean to take of two bodies' interiors.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -63,6 +64,47 @@ pub struct Shell {
     pub faces: Vec<Vec<u32>>,
     /// The input face of each face.
     pub sources: Vec<Source>,
+    /// For a cavity (a shell facing inward, inside another shell that faces outward):
+    /// the index of the shell it is a cavity of. The two bound one body.
+    pub cavity_of: Option<usize>,
+}
+
+impl Shell {
+    /// Six times the signed volume the shell bounds (negative for a cavity or for an
+    /// everted shell).
+    pub fn six_volume(&self) -> f64 {
+        let mut v = 0.0;
+        for f in &self.faces {
+            let a = self.positions[f[0] as usize];
+            for k in 1..f.len() - 1 {
+                let (b, c) = (
+                    self.positions[f[k] as usize],
+                    self.positions[f[k + 1] as usize],
+                );
+                v += a.dot(b.cross(c));
+            }
+        }
+        v
+    }
+
+    /// The winding number of the shell about point `x` (1 inside an outward shell, −1
+    /// inside an inward one, 0 outside), by summing the solid angles its faces subtend.
+    /// A fan of each planar face gives the right signed sum even for concave faces.
+    fn winding(&self, x: DVec3) -> f64 {
+        let mut omega = 0.0;
+        for f in &self.faces {
+            let a = self.positions[f[0] as usize] - x;
+            for k in 1..f.len() - 1 {
+                let b = self.positions[f[k] as usize] - x;
+                let c = self.positions[f[k + 1] as usize] - x;
+                let (la, lb, lc) = (a.length(), b.length(), c.length());
+                let num = a.dot(b.cross(c));
+                let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+                omega += 2.0 * num.atan2(den);
+            }
+        }
+        omega / (4.0 * std::f64::consts::PI)
+    }
 }
 
 /// The result of a boolean: its shells (none when the result is empty).
@@ -70,6 +112,111 @@ pub struct Shell {
 pub struct Solution {
     /// The connected shells, largest first.
     pub shells: Vec<Shell>,
+    /// Whether the result's interior reaches infinity (it holds the points far from
+    /// both operands): with no shells, the result is all of space rather than nothing.
+    pub unbounded: bool,
+}
+
+/// One body of a result: the body and the input face of each of its faces.
+#[derive(Clone, Debug)]
+pub struct Piece {
+    /// The body (serials taken from the counter passed to [`Solution::bodies`]).
+    pub body: Body,
+    /// For each face (by serial), the input face it is a piece of.
+    pub sources: Vec<(Serial, Source)>,
+}
+
+impl Solution {
+    /// The result as bodies: one per shell that is not a cavity, each holding its
+    /// cavities (as further connected polyhedra of the same body). Serials are taken in
+    /// order: a shell's vertices, faces, edges, then its cavities'.
+    pub fn bodies(&self, serials: &mut Serials) -> Result<Vec<Piece>, BuildError> {
+        let mut out = Vec::new();
+        for (i, shell) in self.shells.iter().enumerate() {
+            if shell.cavity_of.is_some() {
+                continue;
+            }
+            let (mut body, mut sources) = shell.build(serials)?;
+            for cavity in self.shells.iter().filter(|c| c.cavity_of == Some(i)) {
+                let (inner, more) = cavity.build(serials)?;
+                body.absorb(inner);
+                sources.extend(more);
+            }
+            out.push(Piece { body, sources });
+        }
+        Ok(out)
+    }
+}
+
+impl Shell {
+    fn build(&self, serials: &mut Serials) -> Result<(Body, Vec<(Serial, Source)>), BuildError> {
+        // A surface facing inward (a cavity, or an everted result) is built facing
+        // outward and everted: from_polygons takes outward surfaces only.
+        let inward = self.six_volume() < 0.0;
+        let body = if inward {
+            let reversed: Vec<Vec<u32>> = self
+                .faces
+                .iter()
+                .map(|f| f.iter().rev().copied().collect())
+                .collect();
+            let mut b = Body::from_polygons(serials, &self.positions, &reversed)?;
+            b.evert();
+            b
+        } else {
+            Body::from_polygons(serials, &self.positions, &self.faces)?
+        };
+        let faces: Vec<_> = body.faces().map(|f| body.face_serial(f)).collect();
+        let mut sorted = faces;
+        sorted.sort_unstable();
+        Ok((
+            body,
+            sorted
+                .into_iter()
+                .zip(self.sources.iter().copied())
+                .collect(),
+        ))
+    }
+}
+
+/// Marks each inward shell lying inside an outward one as that shell's cavity (the
+/// innermost such shell).
+fn nest(shells: &mut [Shell]) {
+    let outward: Vec<bool> = shells.iter().map(|s| s.six_volume() > 0.0).collect();
+    for i in 0..shells.len() {
+        if outward[i] {
+            continue;
+        }
+        let probe = |x: DVec3| -> Option<Vec<usize>> {
+            let mut inside = Vec::new();
+            for (j, s) in shells.iter().enumerate() {
+                if j == i || !outward[j] {
+                    continue;
+                }
+                let w = s.winding(x);
+                if (w - w.round()).abs() > 0.25 {
+                    return None; // on or too near that shell: try another point
+                }
+                if w.round() >= 1.0 {
+                    inside.push(j);
+                }
+            }
+            Some(inside)
+        };
+        let Some(holders) = shells[i].positions.iter().find_map(|&x| probe(x)) else {
+            continue;
+        };
+        // The innermost holder: the one inside every other holder.
+        let innermost = holders.iter().copied().find(|&j| {
+            holders.iter().all(|&k| {
+                k == j
+                    || shells[j]
+                        .positions
+                        .iter()
+                        .any(|&x| shells[k].winding(x).round() >= 1.0)
+            })
+        });
+        shells[i].cavity_of = innermost;
+    }
 }
 
 /// Why a boolean was refused. Faces are named by serial.
@@ -170,8 +317,14 @@ pub fn boolean(a: Operand<'_>, b: Operand<'_>, op: Op) -> Result<Solution, Boole
             });
         }
     }
-    let shells = assemble::assemble(&pts, &kept)?;
-    Ok(Solution { shells })
+    let mut shells = assemble::assemble(&pts, &kept)?;
+    nest(&mut shells);
+    let unbounded = match op {
+        Op::Union => ma.everted || mb.everted,
+        Op::Intersection => ma.everted && mb.everted,
+        Op::Difference => ma.everted && !mb.everted,
+    };
+    Ok(Solution { shells, unbounded })
 }
 
 /// Whether a piece of A in class `c` bounds the result.
