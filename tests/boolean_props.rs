@@ -1,6 +1,6 @@
 //! Properties of `winged::model::boolean` on thousands of generated cases.
 //!
-//! For each case (see `bench/boolean/harness/cases.rs` for the families) and each of
+//! For each case (see `bench/boolean/harness/cases/` for the families) and each of
 //! ∩, ∪ and −: every shell builds and is a valid solid, no face has zero area, Euler's
 //! formula holds per shell, every face names a real source face in whose plane it lies,
 //! and the volume identities hold (exactly on integer-grid cases, to 1e-12 of the
