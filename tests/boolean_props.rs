@@ -259,6 +259,7 @@ mod trivial {
             positions,
             faces,
             sources,
+            cavity_of: None,
         }
     }
 
@@ -268,6 +269,7 @@ mod trivial {
             Op::Difference => Solution::default(),
             _ => Solution {
                 shells: vec![shell(a, place, Which::A, false)],
+                unbounded: false,
             },
         }
     }
@@ -282,6 +284,7 @@ mod trivial {
                 Op::Union => vec![sa, sb],
                 Op::Difference => vec![sa],
             },
+            unbounded: false,
         }
     }
 }

@@ -242,7 +242,10 @@ fn fold(bodies: &[Body], op: Op) -> Result<Solution, String> {
                 boolean(operand(&body), operand(next), op).map_err(|e| format!("refused: {e}"))?;
             shells.extend(step.shells);
         }
-        solution = Solution { shells };
+        solution = Solution {
+            shells,
+            unbounded: false,
+        };
     }
     Ok(solution)
 }

@@ -170,3 +170,18 @@ fn bad_operands_are_refused() {
         "{e:?}"
     );
 }
+
+#[test]
+fn boxes_a_hair_apart() {
+    let mut s = Serials::new();
+    let a = boxed(&mut s, DVec3::new(1.0, 3.0, 1.0));
+    let b = boxed(&mut s, DVec3::new(2.0, 1.5, 1.0));
+    let u = boolean(
+        at(&a, moved(DVec3::ZERO)),
+        at(&b, moved(DVec3::new(0.500000000001, 0.0, 0.0))),
+        Op::Union,
+    )
+    .unwrap();
+    assert_eq!(u.shells.len(), 1);
+    assert!((volume(&u) - (3.0 + 3.0 - 1.5 * 0.499999999999)).abs() < 1e-12);
+}
