@@ -583,6 +583,7 @@ fn answers_match_the_contract() {
     camera_solution(&c);
     lights(&c);
     deletes(&c);
+    booleans(&c);
     following(&c, start);
     unknown_route(&c);
 
@@ -1235,6 +1236,68 @@ fn sweeps_duals_everts_copies(c: &Contract) {
         404,
         Spec::Either,
     );
+}
+
+fn booleans(c: &Contract) {
+    let t = "/v1/bodies/{id}/boolean";
+    let a = id(&c.create(json!({"shape": {"type": "box", "size": [2, 2, 2]}}))["id"]);
+    let b = id(&c.create(json!({
+        "shape": {"type": "box", "size": [2, 2, 2]},
+        "pose": {"position": [1, 0, 0]}
+    }))["id"]);
+    let part =
+        id(&c.create(json!({"shape": {"type": "box", "size": [1, 1, 1]}, "parent": a}))["id"]);
+    let p = format!("/v1/bodies/{a}/boolean");
+    let no = |path: &str, body: Value, status: u16, spec: Spec| {
+        c.refused_json("POST", t, path, body, status, spec)
+    };
+    no(&p, json!({"op": "xor", "with": b}), 400, Spec::Refuses);
+    no(&p, json!({"op": "union"}), 400, Spec::Refuses);
+    no(
+        &p,
+        json!({"op": "union", "with": b, "keep": true}),
+        400,
+        Spec::Refuses,
+    );
+    no(
+        &p,
+        json!({"op": "union", "with": 999_999}),
+        404,
+        Spec::Either,
+    );
+    no(
+        "/v1/bodies/999999/boolean",
+        json!({"op": "union", "with": b}),
+        404,
+        Spec::Either,
+    );
+    let itself = no(&p, json!({"op": "union", "with": a}), 422, Spec::Either);
+    assert_eq!(itself["type"], "urn:winged:problem:boolean-refused");
+    no(
+        &p,
+        json!({"op": "difference", "with": part}),
+        422,
+        Spec::Either,
+    );
+    no(&p, json!({"op": "union", "with": 1}), 422, Spec::Either);
+    c.refused(
+        "POST",
+        t,
+        &p,
+        Send::Raw(Some("text/plain"), b"{}"),
+        415,
+        Spec::Either,
+    );
+    // Two overlapping boxes, kept: one piece of 12 m³.
+    let u = c.ok(
+        "POST",
+        t,
+        &p,
+        Some(json!({"op": "union", "with": b, "keep_with": true})),
+    );
+    assert_eq!(u["id"].as_u64(), Some(a), "{u}");
+    assert_eq!(u["pieces"].as_array().map(Vec::len), Some(1), "{u}");
+    assert_eq!(ids(&u["killed"]), Vec::<u64>::new(), "{u}");
 }
 
 fn cameras(c: &Contract) {

@@ -11,10 +11,11 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::command::{
-    CameraSpec, CameraSpecError, CreateBody, EulerOp, LightSpec, Motion, Move, PatchBody, Shape,
-    Sweep, SweepKind,
+    BooleanPiece, CameraSpec, CameraSpecError, CreateBody, EulerOp, LightSpec, Motion, Move,
+    PatchBody, Shape, Sweep, SweepKind,
 };
 use super::plan::{Prepared, prepare};
+use crate::model::boolean::Op;
 use crate::model::range;
 use crate::model::solids::{
     BuildError, SolidError, Twist, box_solid, cone, cylinder, mktetra, prism_solid, pyramid_solid,
@@ -109,6 +110,37 @@ pub enum Edit {
         /// Its name.
         name: String,
     },
+    /// A boolean as asked for: BIN, BUN or the difference of `body` and `with`. Applied by
+    /// running the boolean kernel; never journaled (it has no serde form): the journal
+    /// keeps the [`Edit::BooleanResult`] it gave (see [`Planned`](super::Planned)).
+    #[serde(skip)]
+    Boolean {
+        /// The body kept (B1): the result replaces it.
+        body: u64,
+        /// The other operand (B2).
+        with: u64,
+        /// Which boolean.
+        op: Op,
+        /// Whether `with` survives; else it is killed.
+        keep_with: bool,
+    },
+    /// A boolean's result as geometry, in the journal as `"edit": "boolean"`: `pieces`
+    /// (in `body`'s frame) placed as [`World::place_boolean`] places shells. Applying it
+    /// runs no kernel, so a replay does not depend on the version of the algorithm that
+    /// computed it.
+    #[serde(rename = "boolean")]
+    BooleanResult {
+        /// The body kept (B1).
+        body: u64,
+        /// The other operand (B2).
+        with: u64,
+        /// Whether `with` survived.
+        keep_with: bool,
+        /// Which boolean it was (for the record; the pieces say what it made).
+        op: Op,
+        /// The result's shells, the first replacing `body`'s polyhedron.
+        pieces: Vec<BooleanPiece>,
+    },
 }
 
 impl Edit {
@@ -128,6 +160,7 @@ impl Edit {
             Edit::DeleteCamera { .. } => "delete_camera",
             Edit::PutLight { .. } => "put_light",
             Edit::DeleteLight { .. } => "delete_light",
+            Edit::Boolean { .. } | Edit::BooleanResult { .. } => "boolean",
         }
     }
 }
@@ -168,6 +201,27 @@ pub struct Outcome {
     /// Vertex count.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub vertices: Option<usize>,
+    /// The bodies a boolean left, the one kept first (empty when nothing is left).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub pieces: Option<Vec<PieceOutcome>>,
+}
+
+/// One body a boolean left (see [`crate::model::Piece`]).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Default)]
+pub struct PieceOutcome {
+    /// The body.
+    pub id: u64,
+    /// Face count.
+    pub faces: usize,
+    /// Edge count.
+    pub edges: usize,
+    /// Vertex count.
+    pub vertices: usize,
+    /// Volume, cubic meters.
+    pub volume: f64,
+    /// For each face, `[face, from body, from face]`: the input face it is a piece of
+    /// (empty when replayed from the journal, which does not keep it).
+    pub sources: Vec<[u64; 3]>,
 }
 
 /// Why an edit was refused.
@@ -241,7 +295,7 @@ impl From<BuildError> for EditError {
     }
 }
 
-fn body_id(world: &World, id: u64) -> Result<BodyId, EditError> {
+pub(super) fn body_id(world: &World, id: u64) -> Result<BodyId, EditError> {
     let b = BodyId(Serial(id));
     if world.node(b).is_some() {
         Ok(b)
@@ -501,6 +555,19 @@ pub(super) fn apply_prepared(
             world.remove_light(name)?;
             Ok(Outcome::default())
         }
+        Edit::Boolean {
+            body,
+            with,
+            op,
+            keep_with,
+        } => super::boolean::run(world, *body, *with, *op, *keep_with).map(|(_, o)| o),
+        Edit::BooleanResult {
+            body,
+            with,
+            keep_with,
+            pieces,
+            ..
+        } => super::boolean::replay(world, *body, *with, *keep_with, pieces),
     }
 }
 

@@ -28,8 +28,9 @@ pub use face_list::FaceList;
 /// build writes (and, with every earlier one, reads).
 pub const FORMAT: u32 = 1;
 
-/// The most faces a body made by one edit may have.
-pub const MAX_BODY_FACES: usize = 2_000_000;
+/// The most faces a body made by one edit may have: the model's own limit, which a
+/// boolean's result is held to as well.
+pub use crate::model::range::MAX_BODY_FACES;
 
 /// The most vertices a polyhedron given in one edit may have: twice the faces, which
 /// every closed polyhedron of [`MAX_BODY_FACES`] faces without handles stays below
@@ -147,6 +148,19 @@ fn up_z() -> DVec3 {
 
 fn one() -> f64 {
     1.0
+}
+
+/// One closed shell of a boolean's result, as the journal keeps it: polygons in the
+/// frame of the body the boolean kept (B1), the faces counter-clockwise seen from
+/// outside. Replaying it builds the body from these polygons with
+/// [`crate::model::Body::from_polygons`]; the kernel that computed them is not run
+/// again.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct BooleanPiece {
+    /// Vertex loci.
+    pub positions: Vec<DVec3>,
+    /// Faces as vertex indices.
+    pub faces: FaceList,
 }
 
 /// Make a body.

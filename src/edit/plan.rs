@@ -70,9 +70,24 @@ impl Planned {
         &self.edit
     }
 
-    /// Applies the plan to `world`, giving back the edit (for the journal) with the
-    /// outcome. On refusal the world is unchanged.
+    /// Applies the plan to `world`, giving back the edit to journal with the outcome.
+    /// That is the edit planned, except for a boolean ([`Edit::Boolean`]): the journal
+    /// keeps the geometry it made ([`Edit::BooleanResult`]), so a replay applies that
+    /// without running the kernel. On refusal the world is unchanged and the edit
+    /// planned is given back.
     pub fn apply(self, world: &mut World) -> (Box<Edit>, Result<Outcome, EditError>) {
+        if let Edit::Boolean {
+            body,
+            with,
+            op,
+            keep_with,
+        } = *self.edit
+        {
+            return match super::boolean::run(world, body, with, op, keep_with) {
+                Ok((journaled, outcome)) => (Box::new(journaled), Ok(outcome)),
+                Err(e) => (self.edit, Err(e)),
+            };
+        }
         let outcome = apply_prepared(world, &self.edit, self.prepared);
         (self.edit, outcome)
     }

@@ -36,4 +36,7 @@ pub use pose::{Pose, PoseError};
 pub use range::RangeError;
 pub use topology::{Around, EdgeUse, Link};
 pub use transform::{Frame, Moves, Transform, TransformError};
-pub use world::{Built, Killed, Named, Register, UngluedBodies, World, WorldError};
+pub use world::{
+    BooleanOutcome, Built, Entangled, Killed, Named, Piece, Register, ShellRef, UngluedBodies,
+    World, WorldError,
+};

@@ -21,7 +21,9 @@
 //! 10²⁸ and sums of millions of them far below `f64::MAX`, so nothing derived from a
 //! world in range overflows.
 //!
-//! Queries, which change nothing, accept points out to ±[`QUERY_LIMIT`].
+//! Queries, which change nothing, accept points out to ±[`QUERY_LIMIT`]; a body made by
+//! one write (a shape, a polyhedron, a boolean's result) has at most [`MAX_BODY_FACES`]
+//! faces.
 
 use glam::DVec3;
 
@@ -44,6 +46,10 @@ pub const WORLD_EXTENT: f64 = MAX_COORDINATE * (1.0 + 1.732_050_807_568_877_2);
 /// have. A box's corners and a radius may be larger: they are clamped, which changes no
 /// answer, since nothing lies beyond [`WORLD_EXTENT`].
 pub const QUERY_LIMIT: f64 = 1e12;
+
+/// The most faces a body made by one write may have (for a boolean, all the pieces of
+/// its result together).
+pub const MAX_BODY_FACES: usize = 2_000_000;
 
 /// Why a number is outside the range.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]

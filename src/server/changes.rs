@@ -156,6 +156,10 @@ pub fn before(world: &World, edit: &Edit) -> Before {
                 existed: false,
             }
         }
+        Edit::Boolean { body, with, .. } | Edit::BooleanResult { body, with, .. } => Before {
+            suparts: supart(*body).chain(supart(*with)).collect(),
+            existed: false,
+        },
         Edit::PutCamera { name, .. } => Before {
             suparts: Vec::new(),
             existed: world.camera(name).is_some(),
@@ -265,6 +269,9 @@ pub fn describe(
         Edit::Sweep { body, .. } | Edit::Dual { body } | Edit::Evert { body } => {
             changes.push(EntityChange::body(Updated, *body, &[Field::Topology]));
         }
+        Edit::Boolean { body, with, .. } | Edit::BooleanResult { body, with, .. } => {
+            boolean(&mut changes, *body, *with, outcome, before);
+        }
         Edit::PutCamera { name, .. } => {
             let action = if before.existed { Updated } else { Added };
             changes.push(EntityChange::named(action, Kind::Camera, name));
@@ -284,5 +291,42 @@ pub fn describe(
         revision,
         edit: edit.kind().to_owned(),
         changes,
+    }
+}
+
+/// The changes of a boolean that kept `body` and took `with`: `body` reshaped (unless
+/// killed), the pieces added beside it, the bodies killed removed, and the parts lists
+/// of the suparts that gained or lost a body, each once.
+fn boolean(
+    changes: &mut Vec<EntityChange>,
+    body: u64,
+    with: u64,
+    outcome: &Outcome,
+    before: &Before,
+) {
+    use Action::{Added, Removed, Updated};
+    let pieces = outcome.pieces.as_deref().unwrap_or_default();
+    let mut suparts = Vec::new();
+    if !pieces.is_empty() {
+        changes.push(EntityChange::body(Updated, body, &[Field::Topology]));
+    }
+    if pieces.len() > 1 {
+        suparts.extend(before.supart_of(body));
+    }
+    for p in pieces.iter().skip(1) {
+        changes.push(EntityChange::body(Added, p.id, &[]));
+    }
+    for &k in &outcome.killed {
+        changes.push(EntityChange::body(Removed, k, &[]));
+        if k == body || k == with {
+            suparts.extend(before.supart_of(k));
+        }
+    }
+    suparts.sort_unstable();
+    suparts.dedup();
+    for s in suparts {
+        if !outcome.killed.contains(&s) {
+            changes.push(EntityChange::body(Updated, s, &[Field::Parts]));
+        }
     }
 }

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::edit::Outcome;
 use crate::model::{Body, Camera, Light, geometry::Bounds};
 
 use super::request::{HexColor, IntrinsicsDto, LightDto, PoseDto};
@@ -61,6 +62,60 @@ pub struct ChangesPage {
     pub more: bool,
     /// The changes, oldest first.
     pub changes: Vec<std::sync::Arc<super::changes::Change>>,
+}
+
+/// `POST /v1/bodies/{id}/boolean`: the bodies the boolean left and those it killed.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct BooleanAnswer {
+    /// The body the boolean was asked of (B1); it is the first piece, or among the
+    /// killed when nothing is left.
+    pub id: u64,
+    /// The bodies holding the result, B1 first.
+    pub pieces: Vec<PieceDto>,
+    /// The bodies removed, each with its parts.
+    pub killed: Vec<u64>,
+    /// The revision.
+    pub revision: u64,
+}
+
+/// One body a boolean left.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct PieceDto {
+    /// Its id.
+    pub id: u64,
+    /// Face count.
+    pub faces: usize,
+    /// Edge count.
+    pub edges: usize,
+    /// Vertex count.
+    pub vertices: usize,
+    /// Enclosed volume, m³.
+    pub volume: f64,
+    /// `[face, from body, from face]` for each face: the input face it is a piece of.
+    pub sources: Vec<[u64; 3]>,
+}
+
+impl BooleanAnswer {
+    /// The answer to a boolean of `body` that ended with `outcome` at `revision`.
+    pub fn new(body: u64, outcome: Outcome, revision: u64) -> Self {
+        let pieces = outcome.pieces.unwrap_or_default();
+        BooleanAnswer {
+            id: body,
+            pieces: pieces
+                .into_iter()
+                .map(|p| PieceDto {
+                    id: p.id,
+                    faces: p.faces,
+                    edges: p.edges,
+                    vertices: p.vertices,
+                    volume: p.volume,
+                    sources: p.sources,
+                })
+                .collect(),
+            killed: outcome.killed,
+            revision,
+        }
+    }
 }
 
 /// `GET /healthz`.

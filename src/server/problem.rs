@@ -225,18 +225,23 @@ impl From<EditError> for Problem {
         match e {
             EditError::World(w) => world_problem(w, detail),
             EditError::Unknown { .. } | EditError::NotInBody { .. } => Problem::not_found(detail),
-            EditError::TooLarge { .. } => Problem::new(
-                StatusCode::PAYLOAD_TOO_LARGE,
-                "too-large",
-                "Body too large",
-                detail,
-            ),
+            EditError::TooLarge { .. } => too_large(detail),
             EditError::Solid(_) => unprocessable("invalid-solid", "Invalid solid", detail),
             EditError::Camera(_) => unprocessable("invalid-camera", "Invalid camera", detail),
             EditError::Light(_) => unprocessable("invalid-light", "Invalid light", detail),
             EditError::BadNumber(_) => Problem::bad_request(detail),
         }
     }
+}
+
+/// 413 `too-large`: the body a write would make has too many faces.
+fn too_large(detail: String) -> Problem {
+    Problem::new(
+        StatusCode::PAYLOAD_TOO_LARGE,
+        "too-large",
+        "Body too large",
+        detail,
+    )
 }
 
 fn unprocessable(kind: &'static str, title: &'static str, detail: String) -> Problem {
@@ -266,6 +271,11 @@ fn world_problem(w: WorldError, detail: String) -> Problem {
         WorldError::Pose(_) => unprocessable("invalid-pose", "Invalid pose", detail),
         WorldError::NonFinite { .. } => Problem::bad_request(detail),
         WorldError::OutOfRange(_) | WorldError::Placement { .. } => out_of_range(detail),
+        WorldError::Entangled(_) | WorldError::Boolean { .. } => {
+            unprocessable("boolean-refused", "Boolean refused", detail)
+        }
+        WorldError::TooLarge { .. } => too_large(detail),
+        WorldError::BooleanFailed(_) => Problem::internal(detail),
     }
 }
 

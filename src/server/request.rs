@@ -1,5 +1,5 @@
 //! The JSON bodies of the write requests (`POST /v1/bodies`, `PATCH /v1/bodies/{id}`,
-//! the Euler, transform and sweep routes, `PUT /v1/cameras/{name}`, `PUT
+//! the Euler, transform, sweep and boolean routes, `PUT /v1/cameras/{name}`, `PUT
 //! /v1/lights/{name}`), as the HTTP API reads them: defaults filled, unknown fields
 //! refused, lists bounded while they are read (a polyhedron past the edit language's
 //! limits is refused with 413 before the rest of it is read).
@@ -433,6 +433,32 @@ pub struct SweepReq {
     /// Scale of the new ring about the face centre (prisms; default 1).
     #[serde(default)]
     pub scale: Option<f64>,
+}
+
+/// The booleans of `POST /v1/bodies/{id}/boolean`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum BooleanOp {
+    /// BIN: the points inside both bodies.
+    Intersection,
+    /// BUN: the points inside either body.
+    Union,
+    /// The points inside this body and not inside the other.
+    Difference,
+}
+
+/// `POST /v1/bodies/{id}/boolean`: this body combined with the body `with`; the result
+/// replaces this body.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct BooleanReq {
+    /// Which boolean.
+    pub op: BooleanOp,
+    /// The other body's id.
+    pub with: u64,
+    /// Whether the other body survives (default: it is killed).
+    #[serde(default)]
+    pub keep_with: bool,
 }
 
 /// `POST /v1/bodies/{id}/copy`.

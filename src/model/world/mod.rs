@@ -35,6 +35,7 @@ use serde::{Deserialize, Serialize};
 
 use super::arena::Arena;
 use super::body::Body;
+use super::boolean::BooleanError;
 use super::camera::{Camera, CameraError, Light, LightError};
 use super::check::{Report, check_topology};
 use super::euler::EulerError;
@@ -46,12 +47,14 @@ use super::solids::BuildError;
 use super::transform::TransformError;
 
 mod body_ops;
+mod boolean;
 mod glue;
 mod insert;
 mod named;
 mod read;
 mod tree;
 
+pub use boolean::{BooleanOutcome, Entangled, Piece, ShellRef};
 pub use insert::Built;
 pub use named::{Named, Register};
 
@@ -137,6 +140,29 @@ pub enum WorldError {
     /// A locus or size outside the world's range (see [`crate::model::range`]).
     #[error(transparent)]
     OutOfRange(#[from] RangeError),
+    /// A boolean of a body with itself or with one of its own parts (at any depth).
+    #[error("{0}")]
+    Entangled(Entangled),
+    /// The boolean kernel refused an operand (not closed, self-intersecting, not
+    /// finite in the boolean's frame).
+    #[error("{}", boolean::refusal_message(.body, .error))]
+    Boolean {
+        /// The body of the operand refused.
+        body: BodyId,
+        /// The kernel's refusal.
+        error: BooleanError,
+    },
+    /// The boolean kernel failed (panicked); nothing was changed.
+    #[error("{0}")]
+    BooleanFailed(String),
+    /// The result of a write would have more faces than one write may make.
+    #[error("the result would have {faces} faces; at most {max} are allowed per request")]
+    TooLarge {
+        /// Faces it would have.
+        faces: usize,
+        /// The limit ([`crate::model::range::MAX_BODY_FACES`]).
+        max: usize,
+    },
     /// The write would place a body's origin outside the world's range.
     #[error(
         "body {body} would have its origin at a world coordinate of {value:e} m, beyond the range of ±{MAX_COORDINATE:e} m"

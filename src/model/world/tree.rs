@@ -148,8 +148,17 @@ impl World {
     /// was removed. Refused for the root or an unknown body.
     pub fn kill(&mut self, b: BodyId) -> Result<Killed, WorldError> {
         self.live_part(b, "killed")?;
-        let bodies = self.tree.remove_subtree(b);
+        let killed = self.remove_with_parts(b);
         self.written();
-        Ok(Killed { bodies })
+        Ok(killed)
+    }
+
+    /// KLBFEV's removal without the revision: `b` and all its sub-parts at any depth
+    /// leave the tree, for a write that does more than kill (see [`World::boolean`]).
+    /// Precondition: `b` lives and is not the root.
+    pub(super) fn remove_with_parts(&mut self, b: BodyId) -> Killed {
+        Killed {
+            bodies: self.tree.remove_subtree(b),
+        }
     }
 }

@@ -114,6 +114,7 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         .route("/v1/bodies/{id}/dual", writes(post(dual)))
         .route("/v1/bodies/{id}/evert", writes(post(evert)))
         .route("/v1/bodies/{id}/copy", writes(post(copy)))
+        .route("/v1/bodies/{id}/boolean", writes(post(boolean)))
         .route("/v1/cameras", reads(get(named::list::<Camera>)))
         .route(
             "/v1/cameras/{name}/image",

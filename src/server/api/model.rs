@@ -1,22 +1,26 @@
 //! The model's routes: bodies, their topology and operators, cameras and lights.
 
+use axum::Json;
 use axum::extract::{Extension, State};
 use axum::http::StatusCode;
+use axum::http::header::ETAG;
 use axum::response::IntoResponse;
 use serde::Deserialize;
 
 use super::extract::{ApiJson, ApiPath, ApiQuery};
-use super::precondition::{IfMatch, Unused, WriteJson};
+use super::precondition::{IfMatch, Unused, WriteJson, etag};
 use super::{Answer, HeavyReads, read_answer, snapshot, world_size, write};
 use crate::edit::Edit;
 use crate::model::{BodyId, Serial, World};
+use crate::server::actor::Applied;
 use crate::server::actor::Handle;
 use crate::server::dto::{
-    BodyAnswer, BodyDto, BodyList, EdgeDto, FaceDto, TopologyDto, VertexDto, WorldSummary, euler_of,
+    BodyAnswer, BodyDto, BodyList, BooleanAnswer, EdgeDto, FaceDto, TopologyDto, VertexDto,
+    WorldSummary, euler_of,
 };
 use crate::server::problem::Problem;
 use crate::server::request::{
-    CopyReq, CreateBody, EulerOp, HexColor, PatchBody, SweepReq, TransformReq,
+    BooleanReq, CopyReq, CreateBody, EulerOp, HexColor, PatchBody, SweepReq, TransformReq,
 };
 
 pub(super) async fn world(State(h): State<Handle>) -> Answer {
@@ -278,4 +282,17 @@ pub(super) async fn copy(
     // The body is optional: none (no Content-Type) means an unnamed copy.
     let name = req.and_then(|ApiJson(r)| r.name);
     write(&h, Edit::Copy { body, name }, expected, StatusCode::CREATED).await
+}
+
+/// `POST /v1/bodies/{id}/boolean`: the body combined with another (BIN, BUN or the
+/// difference); the result replaces it, and the answer lists the bodies left and killed.
+pub(super) async fn boolean(
+    State(h): State<Handle>,
+    ApiPath(body): ApiPath<u64>,
+    req: WriteJson<BooleanReq>,
+) -> Answer {
+    let (edit, expected) = (req.value.into_edit(body), req.expected);
+    let Applied { outcome, revision } = h.apply_if(edit, expected).await?;
+    let answer = BooleanAnswer::new(body, outcome, revision);
+    Ok(([(ETAG, etag(revision))], Json(answer)).into_response())
 }

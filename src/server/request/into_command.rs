@@ -5,10 +5,12 @@
 use glam::{DVec2, DVec3};
 
 use super::{
-    CameraReq, CreateBody, EulerOp, FrameDto, LightDto, PatchBody, PoseDto, Shape, SweepKind,
-    SweepReq, TransformOp, TransformReq,
+    BooleanOp, BooleanReq, CameraReq, CreateBody, EulerOp, FrameDto, LightDto, PatchBody, PoseDto,
+    Shape, SweepKind, SweepReq, TransformOp, TransformReq,
 };
+use crate::edit::Edit;
 use crate::edit::command::{self, CameraSpec, LightSpec, LookAt, Motion, Move, Raster, Sweep};
+use crate::model::boolean::Op;
 use crate::model::{Frame, Intrinsics, Pose};
 
 fn v3(v: [f64; 3]) -> DVec3 {
@@ -204,6 +206,28 @@ impl From<SweepReq> for Sweep {
             offset: req.offset.map(v3),
             peak: req.peak.map(v3),
             scale: req.scale,
+        }
+    }
+}
+
+impl From<BooleanOp> for Op {
+    fn from(op: BooleanOp) -> Self {
+        match op {
+            BooleanOp::Intersection => Op::Intersection,
+            BooleanOp::Union => Op::Union,
+            BooleanOp::Difference => Op::Difference,
+        }
+    }
+}
+
+impl BooleanReq {
+    /// The edit this request asks of body `body` (B1).
+    pub fn into_edit(self, body: u64) -> Edit {
+        Edit::Boolean {
+            body,
+            with: self.with,
+            op: self.op.into(),
+            keep_with: self.keep_with,
         }
     }
 }
