@@ -571,6 +571,44 @@ fn varied_run() -> Run {
     run.refused(json!({"edit": "copy", "body": bx, "name": "box copy"}));
     run.refused(json!({"edit": "copy", "body": 1}));
 
+    // A boolean's result as the journal keeps it: polygons in the kept body's frame,
+    // placed (the first replacing that body, the others beside it) without the kernel.
+    let ba = id(&run.ok(create_at(
+        "boolean a",
+        [0.0, 12.0, 0.0],
+        json!({"type": "box", "size": [2.0, 2.0, 2.0]}),
+    )));
+    let bb = id(&run.ok(create_at(
+        "boolean b",
+        [1.0, 12.0, 0.5],
+        json!({"type": "box", "size": [2.0, 2.0, 2.0]}),
+    )));
+    let piece = |x0: f64| {
+        let corner = |i: u32| {
+            json!([
+                x0 + f64::from(i & 1),
+                f64::from((i >> 1) & 1) - 0.5,
+                f64::from((i >> 2) & 1) - 0.5
+            ])
+        };
+        json!({
+            "positions": (0..8).map(corner).collect::<Vec<_>>(),
+            "faces": [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+        })
+    };
+    let boolean = |body: u64, with: u64, pieces: Vec<Value>| {
+        json!({"edit": "boolean", "body": body, "with": with, "keep_with": false,
+               "op": "difference", "pieces": pieces})
+    };
+    run.refused(boolean(ba, ba, vec![piece(0.0)]));
+    run.refused(boolean(ba, 999_999, vec![piece(0.0)]));
+    let mut open = piece(0.0);
+    open["faces"].as_array_mut().unwrap().pop();
+    run.refused(boolean(ba, bb, vec![open]));
+    let o = run.ok(boolean(ba, bb, vec![piece(-1.0), piece(0.5)]));
+    assert_eq!(o.killed, vec![bb]);
+    assert_eq!(o.pieces.as_ref().map(Vec::len), Some(2));
+
     // Cameras and lights.
     let intr =
         json!({"width": 640, "height": 480, "fx": 600.0, "fy": 600.0, "cx": 320.0, "cy": 240.0});
