@@ -150,21 +150,7 @@ impl Solution {
 
 impl Shell {
     fn build(&self, serials: &mut Serials) -> Result<(Body, Vec<(Serial, Source)>), BuildError> {
-        // A surface facing inward (a cavity, or an everted result) is built facing
-        // outward and everted: from_polygons takes outward surfaces only.
-        let inward = self.six_volume() < 0.0;
-        let body = if inward {
-            let reversed: Vec<Vec<u32>> = self
-                .faces
-                .iter()
-                .map(|f| f.iter().rev().copied().collect())
-                .collect();
-            let mut b = Body::from_polygons(serials, &self.positions, &reversed)?;
-            b.evert();
-            b
-        } else {
-            Body::from_polygons(serials, &self.positions, &self.faces)?
-        };
+        let body = build_shell(serials, &self.positions, &self.faces)?;
         let faces: Vec<_> = body.faces().map(|f| body.face_serial(f)).collect();
         let mut sorted = faces;
         sorted.sort_unstable();
@@ -175,6 +161,38 @@ impl Shell {
                 .zip(self.sources.iter().copied())
                 .collect(),
         ))
+    }
+}
+
+/// Builds one shell as a body, as [`Body::from_polygons`] does, but also when it faces
+/// inward (a cavity, or an everted result): such a surface is built facing outward and
+/// everted, so face `i` still has the `i`-th face serial.
+pub fn build_shell<F: AsRef<[u32]>>(
+    serials: &mut Serials,
+    positions: &[DVec3],
+    faces: &[F],
+) -> Result<Body, BuildError> {
+    let mut six = 0.0;
+    for f in faces {
+        let f = f.as_ref();
+        if f.len() < 3 || f.iter().any(|&i| i as usize >= positions.len()) {
+            continue;
+        }
+        let a = positions[f[0] as usize];
+        for k in 1..f.len() - 1 {
+            six += a.dot(positions[f[k] as usize].cross(positions[f[k + 1] as usize]));
+        }
+    }
+    if six < 0.0 {
+        let reversed: Vec<Vec<u32>> = faces
+            .iter()
+            .map(|f| f.as_ref().iter().rev().copied().collect())
+            .collect();
+        let mut b = Body::from_polygons(serials, positions, &reversed)?;
+        b.evert();
+        Ok(b)
+    } else {
+        Body::from_polygons(serials, positions, faces)
     }
 }
 
@@ -253,6 +271,13 @@ pub enum BooleanError {
         /// The face.
         face: Serial,
     },
+    /// The result encloses a cavity: a hollow solid, which one body (one connected
+    /// surface) cannot hold.
+    #[error("the result encloses a cavity, which one body cannot hold")]
+    Cavity,
+    /// The result is all of space: nothing bounds it.
+    #[error("the result fills all of space: no surface bounds it")]
+    Unbounded,
     /// A configuration the algorithm could not resolve. No input that passes the other
     /// checks should reach it; it is reported instead of a wrong result.
     #[error("the boolean could not be resolved: {what}")]

@@ -183,5 +183,5 @@ fn boxes_a_hair_apart() {
     )
     .unwrap();
     assert_eq!(u.shells.len(), 1);
-    assert!((volume(&u) - (3.0 + 3.0 - 1.5 * 0.499999999999)).abs() < 1e-12);
+    assert!((volume(&u) - (6.0 - 1.5 * 0.999999999999)).abs() < 1e-12);
 }

@@ -113,6 +113,14 @@ pub(super) fn refusal_message(body: &BodyId, error: &boolean::BooleanError) -> S
         E::NonFinite { .. } => {
             format!("body {body} has a vertex that is not finite in the frame of the boolean")
         }
+        E::BadFace { face, .. } => {
+            format!(
+                "body {body}: face {face} is not a simple polygon: its outline crosses itself, repeats a vertex or has no area"
+            )
+        }
+        E::Cavity | E::Unbounded | E::Unresolved { .. } => {
+            format!("the boolean with body {body} is refused: {error}")
+        }
     }
 }
 
@@ -130,6 +138,13 @@ impl World {
         keep_with: bool,
     ) -> Result<BooleanOutcome, WorldError> {
         let solution = self.boolean_solution(b1, b2, op)?;
+        let refuse = |error| WorldError::Boolean { body: b1, error };
+        if solution.shells.iter().any(|s| s.cavity_of.is_some()) {
+            return Err(refuse(boolean::BooleanError::Cavity));
+        }
+        if solution.shells.is_empty() && solution.unbounded {
+            return Err(refuse(boolean::BooleanError::Unbounded));
+        }
         let shells: Vec<ShellRef<'_, Vec<u32>>> = solution.shells.iter().map(Into::into).collect();
         self.place_boolean(b1, b2, keep_with, &shells)
     }
@@ -208,7 +223,7 @@ impl World {
         let mut built = Vec::with_capacity(shells.len());
         for (i, shell) in shells.iter().enumerate() {
             let id = if i == 0 { b1 } else { BodyId(serials.take()) };
-            let body = Body::from_polygons(&mut serials, shell.positions, shell.faces)?;
+            let body = boolean::build_shell(&mut serials, shell.positions, shell.faces)?;
             check_geometry_input(&body)?;
             let piece = Piece {
                 id,
@@ -274,7 +289,9 @@ fn operand_of(e: &boolean::BooleanError) -> Which {
     match *e {
         E::NotClosed { operand, .. }
         | E::SelfIntersecting { operand, .. }
+        | E::BadFace { operand, .. }
         | E::NonFinite { operand } => operand,
+        E::Cavity | E::Unbounded | E::Unresolved { .. } => Which::A,
     }
 }
 
