@@ -479,7 +479,7 @@ fn check_geometry(b: &Body, tol: f64, out: &mut Vec<Violation>) {
             out.push(Violation::FaceTooSmall { face: f, degree });
             continue;
         }
-        match b.face_plane(f) {
+        match b.face_plane_accurate(f) {
             None => out.push(Violation::DegenerateFace { face: f }),
             Some(plane) => {
                 let deviation = b

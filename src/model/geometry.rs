@@ -102,6 +102,28 @@ impl Body {
         n
     }
 
+    /// Newell's area vector of face `f` summed in double-double arithmetic (each product
+    /// split exactly, the sums compensated): accurate to a few units in the last place of
+    /// the result even for a sliver face, whose plain Newell sum loses most of its digits
+    /// to cancellation. Slower than [`Body::newell`]; for the validator.
+    pub fn newell_accurate(&self, f: FaceId) -> DVec3 {
+        let origin = self
+            .face_uses(f)
+            .next()
+            .map_or(DVec3::ZERO, |u| self.position(self.origin(u)));
+        let mut acc = [DoubleDouble::default(); 3];
+        for u in self.face_uses(f) {
+            // p × q about the origin vertex: each component a difference of products.
+            let p = self.position(self.origin(u)) - origin;
+            let q = self.position(self.dest(u)) - origin;
+            for (k, (i, j)) in [(1, 2), (2, 0), (0, 1)].into_iter().enumerate() {
+                acc[k].add_product(p[i], q[j]);
+                acc[k].add_product(-p[j], q[i]);
+            }
+        }
+        DVec3::new(acc[0].value(), acc[1].value(), acc[2].value())
+    }
+
     /// The mean of face `f`'s perimeter vertices (each use counted once).
     pub fn face_center(&self, f: FaceId) -> DVec3 {
         let (mut sum, mut k) = (DVec3::ZERO, 0usize);
@@ -115,7 +137,16 @@ impl Body {
     /// The plane of face `f` (Newell normal through the perimeter's mean point), or
     /// `None` for a face of zero area.
     pub fn face_plane(&self, f: FaceId) -> Option<Plane> {
-        let n = self.newell(f);
+        self.plane_with_normal(f, self.newell(f))
+    }
+
+    /// The plane of face `f` as [`Body::face_plane`], its normal from
+    /// [`Body::newell_accurate`]: right for sliver faces too.
+    pub fn face_plane_accurate(&self, f: FaceId) -> Option<Plane> {
+        self.plane_with_normal(f, self.newell_accurate(f))
+    }
+
+    fn plane_with_normal(&self, f: FaceId, n: DVec3) -> Option<Plane> {
         let len = n.length();
         if len <= f64::MIN_POSITIVE || !len.is_finite() {
             return None;
@@ -207,5 +238,40 @@ impl Body {
                 _ => false,
             }
         })
+    }
+}
+
+/// A sum kept as an unevaluated pair `hi + lo` (double-double): products are added
+/// exactly split (Dekker), sums with Knuth's TwoSum.
+#[derive(Clone, Copy, Debug, Default)]
+struct DoubleDouble {
+    hi: f64,
+    lo: f64,
+}
+
+impl DoubleDouble {
+    fn add(&mut self, x: f64) {
+        let s = self.hi + x;
+        let bv = s - self.hi;
+        let err = (self.hi - (s - bv)) + (x - bv);
+        self.hi = s;
+        self.lo += err;
+    }
+
+    fn add_product(&mut self, a: f64, b: f64) {
+        let p = a * b;
+        let split = |x: f64| {
+            let c = 134_217_729.0 * x;
+            let hi = c - (c - x);
+            (hi, x - hi)
+        };
+        let ((ah, al), (bh, bl)) = (split(a), split(b));
+        let e = al * bl - (((p - ah * bh) - al * bh) - ah * bl);
+        self.add(p);
+        self.lo += e;
+    }
+
+    fn value(self) -> f64 {
+        self.hi + self.lo
     }
 }

@@ -6,8 +6,9 @@
 //! Every cutter reaches the block's boundary (most go beyond it), so no cavity can
 //! form: what a cutter removes joins the outside. The region may fall apart into
 //! several pieces; each piece is a body of its own and every cutter is taken from each
-//! piece whose bounds it touches. All loci are multiples of 2⁻¹⁰ below 2, so each
-//! piece's volume (sums of 2⁻³⁰ multiples below 2⁵³ units) is exact in f64.
+//! piece whose bounds it touches. Every locus must stay a multiple of 2⁻¹⁰ (the
+//! coordinates do not drift), and each piece's volume is summed exactly, in integers of
+//! the grid, from its faces.
 
 use glam::{DAffine3, DVec3};
 use winged::model::boolean::{Op, Operand, boolean};
@@ -118,12 +119,17 @@ pub fn carve(seed: u64, steps: usize) -> Result<Carved, CarveFault> {
         }
         pieces = next;
         grid.subtract(cut);
-        let volume: f64 = pieces.iter().map(Body::volume).sum();
-        let exact = grid.volume() as f64 / (UNIT * UNIT * UNIT) as f64;
-        if volume != exact {
+        let mut six: i128 = 0;
+        for piece in &pieces {
+            six += six_volume_in_cells(piece).map_err(|e| at(step)(Fault::Identity(e)))?;
+        }
+        let counted = 6 * grid.volume() as i128;
+        if six != counted {
             return Err(at(step)(Fault::Identity(format!(
-                "the pieces hold {volume:e} m³, the grid counts {exact:e} m³ (off by {:e})",
-                volume - exact
+                "the pieces hold {} cells, the grid counts {} (off by {} sixths of a cell)",
+                six as f64 / 6.0,
+                grid.volume(),
+                six - counted
             ))));
         }
     }
@@ -135,6 +141,35 @@ pub fn carve(seed: u64, steps: usize) -> Result<Carved, CarveFault> {
         exact: grid.volume() as f64 / (UNIT * UNIT * UNIT) as f64,
         grid_boxes: grid.len(),
     })
+}
+
+/// Six times `body`'s volume in grid cells, summed exactly over fans of its faces;
+/// refused if a locus is off the grid.
+fn six_volume_in_cells(body: &Body) -> Result<i128, String> {
+    let cell = |p: DVec3| -> Result<[i128; 3], String> {
+        let q = p * UNIT as f64;
+        if q.round() != q {
+            return Err(format!("locus {p} is off the 1/{UNIT} grid"));
+        }
+        Ok([q.x as i128, q.y as i128, q.z as i128])
+    };
+    let mut six = 0i128;
+    for f in body.faces() {
+        let ring: Vec<[i128; 3]> = body
+            .face_vertices(f)
+            .map(|v| cell(body.position(v)))
+            .collect::<Result<_, _>>()?;
+        for k in 1..ring.len().saturating_sub(1) {
+            let (a, b, c) = (ring[0], ring[k], ring[k + 1]);
+            let cross = [
+                b[1] * c[2] - b[2] * c[1],
+                b[2] * c[0] - b[0] * c[2],
+                b[0] * c[1] - b[1] * c[0],
+            ];
+            six += a[0] * cross[0] + a[1] * cross[1] + a[2] * cross[2];
+        }
+    }
+    Ok(six)
 }
 
 /// `piece − cutter`, checked; its shells as bodies (none may be a cavity).

@@ -140,31 +140,91 @@ fn two_product_error(a: f64, b: f64, v: f64) -> f64 {
     al * bl - (((v - ah * bh) - al * bh) - ah * bl)
 }
 
-/// An exact dyadic rational `m · 2^x`.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// An exact dyadic rational `m · 2^x`. The mantissa is held in an `i128` while it fits
+/// (integer-grid inputs stay there through whole predicates) and in a `BigInt` past
+/// that; both forms are exact.
+#[derive(Clone, Debug)]
 pub(crate) struct Dy {
-    m: BigInt,
+    m: Mantissa,
     x: i32,
+}
+
+#[derive(Clone, Debug)]
+enum Mantissa {
+    Small(i128),
+    Big(BigInt),
+}
+
+impl Mantissa {
+    fn big(&self) -> BigInt {
+        match self {
+            Mantissa::Small(v) => BigInt::from(*v),
+            Mantissa::Big(b) => b.clone(),
+        }
+    }
+
+    fn sign(&self) -> i8 {
+        match self {
+            Mantissa::Small(v) => v.signum() as i8,
+            Mantissa::Big(b) => match b.sign() {
+                Sign::Minus => -1,
+                Sign::NoSign => 0,
+                Sign::Plus => 1,
+            },
+        }
+    }
+
+    fn is_zero(&self) -> bool {
+        self.sign() == 0
+    }
+
+    /// `self · 2^s`, exactly.
+    fn shl(&self, s: u32) -> Mantissa {
+        if s == 0 {
+            return self.clone();
+        }
+        if let Mantissa::Small(v) = self
+            && (*v == 0 || (s < 126 && v.unsigned_abs().leading_zeros() > s + 1))
+        {
+            return Mantissa::Small(v << s);
+        }
+        Mantissa::Big(self.big() << (s as usize))
+    }
 }
 
 impl Dy {
     /// −1, 0 or 1.
     pub fn sign(&self) -> i8 {
-        match self.m.sign() {
-            Sign::Minus => -1,
-            Sign::NoSign => 0,
-            Sign::Plus => 1,
-        }
+        self.m.sign()
     }
 
     /// Both numbers over one power of two: (self's mantissa, other's mantissa, exponent).
-    fn aligned(&self, o: &Dy) -> (BigInt, BigInt, i32) {
+    fn aligned(&self, o: &Dy) -> (Mantissa, Mantissa, i32) {
+        if self.m.is_zero() {
+            return (Mantissa::Small(0), o.m.clone(), o.x);
+        }
+        if o.m.is_zero() {
+            return (self.m.clone(), Mantissa::Small(0), self.x);
+        }
         if self.x <= o.x {
-            (self.m.clone(), &o.m << ((o.x - self.x) as usize), self.x)
+            (self.m.clone(), o.m.shl((o.x - self.x) as u32), self.x)
         } else {
-            (&self.m << ((self.x - o.x) as usize), o.m.clone(), o.x)
+            (self.m.shl((self.x - o.x) as u32), o.m.clone(), o.x)
         }
     }
+
+    fn big_mantissa(&self) -> BigInt {
+        self.m.big()
+    }
+}
+
+fn add_m(a: Mantissa, b: Mantissa) -> Mantissa {
+    if let (Mantissa::Small(p), Mantissa::Small(q)) = (&a, &b)
+        && let Some(r) = p.checked_add(*q)
+    {
+        return Mantissa::Small(r);
+    }
+    Mantissa::Big(a.big() + b.big())
 }
 
 impl Ring for Dy {
@@ -172,7 +232,7 @@ impl Ring for Dy {
         debug_assert!(x.is_finite());
         if x == 0.0 {
             return Dy {
-                m: BigInt::zero(),
+                m: Mantissa::Small(0),
                 x: 0,
             };
         }
@@ -184,10 +244,12 @@ impl Ring for Dy {
         } else {
             (frac | (1u64 << 52), exp - 1075)
         };
-        let m = BigInt::from(mant);
+        // Normalised: no trailing zero bits, so small numbers have small mantissas.
+        let tz = mant.trailing_zeros();
+        let m = (mant >> tz) as i128;
         Dy {
-            m: if x < 0.0 { -m } else { m },
-            x: e,
+            m: Mantissa::Small(if x < 0.0 { -m } else { m }),
+            x: e + tz as i32,
         }
     }
 }
@@ -196,35 +258,42 @@ impl Add for Dy {
     type Output = Dy;
     fn add(self, o: Dy) -> Dy {
         let (a, b, x) = self.aligned(&o);
-        Dy { m: a + b, x }
+        Dy { m: add_m(a, b), x }
     }
 }
 
 impl Sub for Dy {
     type Output = Dy;
     fn sub(self, o: Dy) -> Dy {
-        let (a, b, x) = self.aligned(&o);
-        Dy { m: a - b, x }
+        self + (-o)
     }
 }
 
 impl Neg for Dy {
     type Output = Dy;
     fn neg(self) -> Dy {
-        Dy {
-            m: -self.m,
-            x: self.x,
-        }
+        let m = match self.m {
+            Mantissa::Small(v) => match v.checked_neg() {
+                Some(n) => Mantissa::Small(n),
+                None => Mantissa::Big(-BigInt::from(v)),
+            },
+            Mantissa::Big(b) => Mantissa::Big(-b),
+        };
+        Dy { m, x: self.x }
     }
 }
 
 impl Mul for Dy {
     type Output = Dy;
     fn mul(self, o: Dy) -> Dy {
-        Dy {
-            m: self.m * o.m,
-            x: self.x + o.x,
-        }
+        let m = match (&self.m, &o.m) {
+            (Mantissa::Small(p), Mantissa::Small(q)) => match p.checked_mul(*q) {
+                Some(r) => Mantissa::Small(r),
+                None => Mantissa::Big(BigInt::from(*p) * BigInt::from(*q)),
+            },
+            _ => Mantissa::Big(self.m.big() * o.m.big()),
+        };
+        Dy { m, x: self.x + o.x }
     }
 }
 
@@ -234,7 +303,7 @@ pub(crate) fn quotient_to_f64(num: &Dy, den: &Dy) -> f64 {
         return 0.0;
     }
     let negative = (num.sign() < 0) != (den.sign() < 0);
-    let (n, d) = (num.m.abs(), den.m.abs());
+    let (n, d) = (num.big_mantissa().abs(), den.big_mantissa().abs());
     // Scale the numerator so the integer quotient has at least 66 significant bits.
     let shift = (d.bits() as i64 - n.bits() as i64 + 66).max(0) as usize;
     let scaled = n << shift;
@@ -306,6 +375,19 @@ mod tests {
         assert_eq!(f.sign(), None);
         let d: Dy = det2(a, 1.0, 1.0, b);
         assert_eq!(d.sign(), -1);
+    }
+
+    #[test]
+    fn exact_products_outgrow_the_small_form_and_stay_exact() {
+        // (1 + 2^-52)^3 − 1 − 3·2^-52 − 3·2^-104 = 2^-156: needs 157 bits.
+        let a = 1.0 + f64::EPSILON;
+        let e = f64::EPSILON;
+        let cube = Dy::of(a) * Dy::of(a) * Dy::of(a);
+        let rest =
+            cube - Dy::of(1.0) - Dy::of(3.0) * Dy::of(e) - Dy::of(3.0) * Dy::of(e) * Dy::of(e);
+        assert_eq!(rest.sign(), 1);
+        let gone = rest - Dy::of(e) * Dy::of(e) * Dy::of(e);
+        assert_eq!(gone.sign(), 0);
     }
 
     #[test]

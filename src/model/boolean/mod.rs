@@ -1,7 +1,44 @@
 //! Booleans on closed winged-edge bodies: Baumgart's BIN (intersection of interiors),
 //! BUN (union) and the difference A − B = A ∩ EVERT(B).
 //!
-//! (Approach: see the opening comment once the algorithm lands.)
+//! # Approach: exact decisions on the input points, constructions never rounded
+//!
+//! Every decision is the sign of a polynomial in input coordinates, which are f64 and
+//! hence exact dyadic rationals. The points the boolean makes are kept as their
+//! definitions in input points, never as rounded coordinates ([`point`]): the line
+//! through two input points meeting the plane through three (an edge piercing a
+//! triangle), or two coplanar segments crossing. Predicates on such points are
+//! Attene's *indirect predicates*: evaluated through homogeneous coordinates, first in
+//! f64 with a running error bound, then, when the bound cannot decide the sign, in exact
+//! dyadic arithmetic ([`exact`]); predicates on input points alone are Shewchuk's
+//! adaptive `orient2d`/`orient3d` (the `robust` crate). Because each boolean starts from
+//! f64 inputs and rounds only its output, constructions never nest, so the degree of
+//! every predicate is bounded. (EMBER's plane-based representation, which would keep
+//! results exact across successive booleans, is not used: results are rounded once, and
+//! a later boolean starts afresh from those f64 loci.)
+//!
+//! 1. **Triangles** ([`mesh`]): each face is cut into triangles of its own vertices by
+//!    exact ear clipping; a triangle is exactly planar where a polygon, once rounded,
+//!    need not be. Loci equal in both operands become one point.
+//! 2. **Traces** ([`intersect`]): each pair of triangles whose boxes overlap ([`broad`])
+//!    meets in a segment (or, coplanar, in the boundary of their overlap). Each end is
+//!    named by the smallest elements of the two surfaces that hold it (vertex, edge or
+//!    triangle), so the same point reached from different pairs is made once, and
+//!    shared faces, edges and vertices of touching bodies are ordinary cases.
+//! 3. **Cuts** ([`split`]): each triangle the traces touch is triangulated with the
+//!    traces as constraints, with exact orientations in its dominant projection.
+//! 4. **Classes** ([`classify`]): pieces joined across edges that are not traces form
+//!    regions the other surface does not cross. One point inside each region is
+//!    classified exactly: on the other surface (facing the same way or not), or inside
+//!    or outside by the winding number of a ray whose direction is perturbed
+//!    symbolically. Everted operands (an unbounded interior) are followed the same way.
+//! 5. **Assembly** ([`assemble`]): the pieces each operation keeps are sewn along their
+//!    edges into shells; pieces of one input face merge back into polygons (a face with
+//!    a hole becomes two polygons, since a winged-edge face is one ring); vertices where
+//!    two faces meet in a straight line are dropped; cavities are matched with the
+//!    shell that holds them; loci are rounded, once, to the nearest f64.
+//!
+//! Every output face records the input face it is a piece of ([`Source`]).
 
 use glam::{DAffine3, DVec3};
 

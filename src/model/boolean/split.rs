@@ -90,7 +90,7 @@ pub(crate) fn cut(
         if verts.contains(&p) {
             continue;
         }
-        insert_point(&mut t, &orient, p)?;
+        insert_point(pts, &mut t, &orient, p)?;
         verts.push(p);
     }
     let mut traced: Vec<EdgeKey> = Vec::new();
@@ -108,15 +108,30 @@ pub(crate) fn cut(
 }
 
 fn insert_point(
+    pts: &Points,
     t: &mut Tri2,
     orient: &impl Fn(Pid, Pid, Pid) -> i8,
     p: Pid,
 ) -> Result<(), CutError> {
+    let (at, slack) = (pts.approx[p as usize], pts.slack[p as usize] + 1e-300);
     for i in 0..t.pts.len() {
         if !t.alive[i] {
             continue;
         }
         let [a, b, c] = t.pts[i];
+        // Skip triangles whose box (of approximations, widened by their bounds) misses p.
+        let outside = (0..3).any(|k| {
+            let vs = [a, b, c].map(|v| (pts.approx[v as usize][k], pts.slack[v as usize]));
+            let min = vs.iter().map(|(x, e)| x - e).fold(f64::INFINITY, f64::min);
+            let max = vs
+                .iter()
+                .map(|(x, e)| x + e)
+                .fold(f64::NEG_INFINITY, f64::max);
+            at[k] + slack < min || at[k] - slack > max
+        });
+        if outside {
+            continue;
+        }
         let o = [orient(a, b, p), orient(b, c, p), orient(c, a, p)];
         if o.iter().any(|&s| s < 0) {
             continue;
@@ -189,56 +204,67 @@ fn insert_segment(
     }
     // Cut the trace at any vertex on it.
     for &w in verts {
-        if w != p && w != q && orient(p, q, w) == 0 && strictly_between(pts, p, q, w) {
+        // The cheap test first: most points are not within the segment's span.
+        if w != p && w != q && strictly_between(pts, p, q, w) && orient(p, q, w) == 0 {
             insert_segment(pts, t, orient, verts, p, w, traced, depth + 1)?;
             return insert_segment(pts, t, orient, verts, w, q, traced, depth + 1);
         }
     }
-    let mut rounds = 0usize;
-    loop {
-        if t.edge.contains_key(&(p, q)) || t.edge.contains_key(&(q, p)) {
-            traced.push(edge_key(p, q));
-            return Ok(());
-        }
-        rounds += 1;
-        if rounds > 4 * t.pts.len() + 16 {
+    if t.edge.contains_key(&(p, q)) || t.edge.contains_key(&(q, p)) {
+        traced.push(edge_key(p, q));
+        return Ok(());
+    }
+    // Sloan's recovery: a queue of the edges crossing p–q; a convex quadrilateral's
+    // diagonal is flipped, and the new diagonal goes back in the queue while it still
+    // crosses; a non-convex one waits at the back.
+    let crosses = |u: Pid, v: Pid| {
+        orient(p, q, u) * orient(p, q, v) < 0 && orient(u, v, p) * orient(u, v, q) < 0
+    };
+    let mut queue: std::collections::VecDeque<(Pid, Pid)> = {
+        let mut e: Vec<(Pid, Pid)> = t
+            .edge
+            .iter()
+            .filter(|((u, v), i)| u < v && t.alive[**i])
+            .map(|(k, _)| *k)
+            .filter(|&(u, v)| crosses(u, v))
+            .collect();
+        e.sort_unstable();
+        e.into()
+    };
+    let limit = 8 * (queue.len() + 1) * (queue.len() + 1) + 64;
+    let mut steps = 0usize;
+    while let Some((u, v)) = queue.pop_front() {
+        steps += 1;
+        if steps > limit {
             return Err(CutError);
         }
-        // Flip one crossing edge whose quadrilateral is convex.
-        let mut flipped = false;
-        let edges: Vec<((Pid, Pid), usize)> = t.edge.iter().map(|(k, v)| (*k, *v)).collect();
-        let mut edges = edges;
-        edges.sort_unstable();
-        for ((u, v), i) in edges {
-            if u > v || !t.alive[i] {
-                continue;
-            }
-            let Some(&j) = t.edge.get(&(v, u)) else {
-                continue;
-            };
-            if orient(p, q, u) * orient(p, q, v) >= 0 || orient(u, v, p) * orient(u, v, q) >= 0 {
-                continue;
-            }
-            if traced.contains(&edge_key(u, v)) {
-                return Err(CutError); // two traces cross
-            }
-            let x = third(t.pts[i], u, v);
-            let y = third(t.pts[j], v, u);
-            // Convex: the other diagonal crosses this one.
-            if orient(x, y, u) * orient(x, y, v) >= 0 {
-                continue;
-            }
-            t.kill(i);
-            t.kill(j);
-            // (u, v, x) and (v, u, y) become (x, y, v)... keeping counter-clockwise.
-            t.add([u, y, x]);
-            t.add([v, x, y]);
-            flipped = true;
-            break;
+        let (Some(&i), Some(&j)) = (t.edge.get(&(u, v)), t.edge.get(&(v, u))) else {
+            continue; // flipped away already
+        };
+        if traced.contains(&edge_key(u, v)) {
+            return Err(CutError); // two traces cross
         }
-        if !flipped {
-            return Err(CutError);
+        let x = third(t.pts[i], u, v);
+        let y = third(t.pts[j], v, u);
+        // Convex: the other diagonal crosses this one.
+        if orient(x, y, u) * orient(x, y, v) >= 0 {
+            queue.push_back((u, v));
+            continue;
         }
+        t.kill(i);
+        t.kill(j);
+        // (u, v, x) and (v, u, y) become (u, y, x) and (v, x, y), counter-clockwise.
+        t.add([u, y, x]);
+        t.add([v, x, y]);
+        if crosses(x, y) {
+            queue.push_back((x, y));
+        }
+    }
+    if t.edge.contains_key(&(p, q)) || t.edge.contains_key(&(q, p)) {
+        traced.push(edge_key(p, q));
+        Ok(())
+    } else {
+        Err(CutError)
     }
 }
 
