@@ -48,18 +48,18 @@ pub(crate) fn pieces(
     traces: &Traces,
 ) -> Result<Pieces, BooleanError> {
     let mut out = Pieces::default();
-    let mut extra: Vec<Pid> = Vec::new();
+    let mut extra: Vec<(Pid, u8)> = Vec::new();
     for (i, &tri) in mesh.tris.iter().enumerate() {
         extra.clear();
         for k in 0..3 {
             if let Some(on) = traces.on_edge.get(&edge_key(tri[k], tri[(k + 1) % 3])) {
-                extra.extend_from_slice(on);
+                extra.extend(on.iter().map(|&p| (p, 1u8 << k)));
             }
         }
         let mine = segs.get(&(i as u32));
         if let Some(s) = mine {
             for seg in s {
-                extra.extend_from_slice(seg);
+                extra.extend(seg.iter().map(|&p| (p, 0u8)));
             }
         }
         if extra.is_empty() && mine.is_none() {

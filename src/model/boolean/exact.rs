@@ -19,6 +19,11 @@ pub(crate) trait Ring:
 {
     /// The f64 `x`, exactly (precondition: finite).
     fn of(x: f64) -> Self;
+
+    /// A value already computed in the filter, if this ring is the filter's.
+    fn from_filter(_h: &[Fx; 4]) -> Option<[Self; 4]> {
+        None
+    }
 }
 
 /// Unit roundoff of f64.
@@ -58,6 +63,11 @@ impl Ring for Fx {
     #[inline]
     fn of(x: f64) -> Self {
         Fx { v: x, e: 0.0 }
+    }
+
+    #[inline]
+    fn from_filter(h: &[Fx; 4]) -> Option<[Self; 4]> {
+        Some(*h)
     }
 }
 

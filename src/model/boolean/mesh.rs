@@ -14,6 +14,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
+use super::exact::{Fx, Ring};
 use super::point::{Def, Pid, Points};
 use super::{BooleanError, Operand, Which};
 use crate::model::ids::Serial;
@@ -72,6 +73,8 @@ fn mesh(
             pts.input.push(p);
             pts.approx.push(p);
             pts.slack.push(0.0);
+            pts.filtered
+                .push([Fx::of(p.x), Fx::of(p.y), Fx::of(p.z), Fx::of(1.0)]);
             id
         });
         pid[v.index()] = id;

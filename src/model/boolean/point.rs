@@ -41,6 +41,8 @@ pub(crate) struct Points {
     pub approx: Vec<DVec3>,
     /// A bound on each approximation's error (per coordinate; infinite if unknown).
     pub slack: Vec<f64>,
+    /// Each point's homogeneous coordinates in the filter, computed once.
+    pub filtered: Vec<[Fx; 4]>,
 }
 
 impl Points {
@@ -60,12 +62,14 @@ impl Points {
         };
         self.approx.push(x);
         self.slack.push(slack);
+        self.filtered.push(h);
         self.defs.push(def);
         id
     }
 
     /// Forgets every point from `len` on (constructions made only to test).
     pub fn truncate(&mut self, len: usize) {
+        self.filtered.truncate(len);
         self.defs.truncate(len);
         self.approx.truncate(len);
         self.slack.truncate(len);
@@ -77,6 +81,16 @@ impl Points {
         match self.defs[p as usize] {
             Def::Input(i) => self.input[i as usize],
             _ => unreachable!("a construction's definition names input points only"),
+        }
+    }
+
+    /// Homogeneous coordinates of point `p` in `R`: the filter's are kept from when the
+    /// point was made.
+    #[inline]
+    pub fn homog_of<R: Ring>(&self, p: Pid) -> [R; 4] {
+        match R::from_filter(&self.filtered[p as usize]) {
+            Some(h) => h,
+            None => self.homog(self.defs[p as usize]),
         }
     }
 
@@ -124,9 +138,9 @@ impl Points {
             }
             Def::Mix { p, w } => {
                 let h: [[R; 4]; 3] = [
-                    self.homog(self.defs[p[0] as usize]),
-                    self.homog(self.defs[p[1] as usize]),
-                    self.homog(self.defs[p[2] as usize]),
+                    self.homog_of(p[0]),
+                    self.homog_of(p[1]),
+                    self.homog_of(p[2]),
                 ];
                 let ws = [R::of(w[0] as f64), R::of(w[1] as f64), R::of(w[2] as f64)];
                 let w01 = h[0][3].clone() * h[1][3].clone();
@@ -336,7 +350,7 @@ impl Poly for Side<'_> {
     fn eval<R: Ring>(&self) -> R {
         let [a, b, c] = self.tri.map(|q| vec3::<R>(self.pts.at(q)));
         let n = cross(&sub(&b, &a), &sub(&c, &a));
-        let [x, y, z, w] = self.pts.homog::<R>(self.pts.defs[self.p as usize]);
+        let [x, y, z, w] = self.pts.homog_of::<R>(self.p);
         let d = [
             x - a[0].clone() * w.clone(),
             y - a[1].clone() * w.clone(),
@@ -356,9 +370,7 @@ struct Orient2<'a> {
 impl Poly for Orient2<'_> {
     fn eval<R: Ring>(&self) -> R {
         let (i, j) = others(self.axis);
-        let h = self
-            .p
-            .map(|q| self.pts.homog::<R>(self.pts.defs[q as usize]));
+        let h = self.p.map(|q| self.pts.homog_of::<R>(q));
         let m = |r: usize| [h[r][i].clone(), h[r][j].clone(), h[r][3].clone()];
         let (a, b, c) = (m(0), m(1), m(2));
         a[0].clone() * (b[1].clone() * c[2].clone() - b[2].clone() * c[1].clone())
@@ -393,7 +405,7 @@ struct RayMinor<'a> {
 
 impl Poly for RayMinor<'_> {
     fn eval<R: Ring>(&self) -> R {
-        let [x, y, z, w] = self.pts.homog::<R>(self.pts.defs[self.x as usize]);
+        let [x, y, z, w] = self.pts.homog_of::<R>(self.x);
         let xv = [x, y, z];
         let rel = |q: Pid| {
             let v = vec3::<R>(self.pts.at(q));
@@ -418,6 +430,10 @@ mod tests {
             defs: (0..loci.len() as u32).map(Def::Input).collect(),
             approx: loci.to_vec(),
             slack: vec![0.0; loci.len()],
+            filtered: loci
+                .iter()
+                .map(|p| [Fx::of(p.x), Fx::of(p.y), Fx::of(p.z), Fx::of(1.0)])
+                .collect(),
         }
     }
 

@@ -66,11 +66,14 @@ impl Tri2 {
 }
 
 /// Cuts triangle `tri` (input points) by the points `extra` (on its edges or inside
-/// it) and the traces `segs` (between its corners and those points).
+/// it) and the traces `segs` (between its corners and those points). Each extra point
+/// comes with the edges of `tri` it is known to lie on (bit `k` for the edge from
+/// corner `k` to corner `k + 1`): three points on one edge are collinear without
+/// arithmetic.
 pub(crate) fn cut(
     pts: &Points,
     tri: [Pid; 3],
-    extra: &[Pid],
+    extra: &[(Pid, u8)],
     segs: &[[Pid; 2]],
 ) -> Result<Cut, CutError> {
     let axis = dominant_axis(pts, tri);
@@ -78,7 +81,21 @@ pub(crate) fn cut(
     if sense == 0 {
         return Err(CutError);
     }
-    let orient = |p: Pid, q: Pid, r: Pid| pts.orient2d(axis, [p, q, r]) * sense;
+    let mut on_edges: HashMap<Pid, u8> = HashMap::with_capacity(extra.len() + 3);
+    for (k, &corner) in tri.iter().enumerate() {
+        on_edges.insert(corner, (1 << k) | (1 << ((k + 2) % 3)));
+    }
+    for &(p, m) in extra {
+        *on_edges.entry(p).or_default() |= m;
+    }
+    let mask = |p: Pid| on_edges.get(&p).copied().unwrap_or(0);
+    let orient = |p: Pid, q: Pid, r: Pid| {
+        if mask(p) & mask(q) & mask(r) != 0 {
+            0
+        } else {
+            pts.orient2d(axis, [p, q, r]) * sense
+        }
+    };
     let mut t = Tri2 {
         pts: Vec::new(),
         alive: Vec::new(),
@@ -86,7 +103,7 @@ pub(crate) fn cut(
     };
     t.add(tri);
     let mut verts: Vec<Pid> = tri.to_vec();
-    for &p in extra {
+    for &(p, _) in extra {
         if verts.contains(&p) {
             continue;
         }
