@@ -151,22 +151,18 @@ fn grow(
     let source = kept[seed as usize].source;
     region[seed as usize] = id;
     let s = seed as usize * 3;
-    // The boundary: half-edge → its successor and predecessor along the region's rim.
-    let mut succ: HashMap<usize, usize> = HashMap::new();
-    let mut pred: HashMap<usize, usize> = HashMap::new();
-    let mut on_rim: HashMap<u32, u32> = HashMap::new();
+    let mut rim = Rim::default();
     for k in 0..3 {
-        succ.insert(s + k, s + (k + 1) % 3);
-        pred.insert(s + (k + 1) % 3, s + k);
-        *on_rim.entry(vertex_of[s + k]).or_default() += 1;
+        rim.link(s + k, s + (k + 1) % 3);
+        *rim.on_rim.entry(vertex_of[s + k]).or_default() += 1;
     }
     let mut start = s;
     loop {
         let mut grew = false;
-        let mut rim: Vec<usize> = succ.keys().copied().collect();
-        rim.sort_unstable();
-        for h in rim {
-            if !succ.contains_key(&h) {
+        let mut edges: Vec<usize> = rim.succ.keys().copied().collect();
+        edges.sort_unstable();
+        for h in edges {
+            if !rim.succ.contains_key(&h) {
                 continue;
             }
             let g = twin[h] as usize;
@@ -176,52 +172,27 @@ fn grow(
             }
             let g1 = next(g);
             let g2 = next(g1);
-            let (ph, nh) = (pred[&h], succ[&h]);
+            let (ph, nh) = (rim.pred[&h], rim.succ[&h]);
             if ph == twin[g1] as usize && nh == twin[g2] as usize {
                 continue;
             }
             if ph == twin[g1] as usize {
                 // The piece fills the notch before h: ph and h leave, g2 joins.
-                let pp = pred[&ph];
-                for x in [ph, h] {
-                    succ.remove(&x);
-                    pred.remove(&x);
-                }
-                *on_rim.get_mut(&vertex_of[h]).expect("on the rim") -= 1;
-                *on_rim.get_mut(&vertex_of[ph]).expect("on the rim") -= 1;
-                *on_rim.entry(vertex_of[g2]).or_default() += 1;
-                succ.insert(pp, g2);
-                pred.insert(g2, pp);
-                succ.insert(g2, nh);
-                pred.insert(nh, g2);
+                rim.replace_pair(vertex_of, ph, h, g2);
             } else if nh == twin[g2] as usize {
                 // The piece fills the notch after h: h and nh leave, g1 joins.
-                let nn = succ[&nh];
-                for x in [h, nh] {
-                    succ.remove(&x);
-                    pred.remove(&x);
-                }
-                *on_rim.get_mut(&vertex_of[h]).expect("on the rim") -= 1;
-                *on_rim.get_mut(&vertex_of[nh]).expect("on the rim") -= 1;
-                *on_rim.entry(vertex_of[g1]).or_default() += 1;
-                succ.insert(ph, g1);
-                pred.insert(g1, ph);
-                succ.insert(g1, nn);
-                pred.insert(nn, g1);
+                rim.replace_pair(vertex_of, h, nh, g1);
             } else {
                 let w = vertex_of[g2];
-                if on_rim.get(&w).copied().unwrap_or(0) > 0 {
+                if rim.on_rim.get(&w).copied().unwrap_or(0) > 0 {
                     continue; // it would pinch the region at w
                 }
-                succ.remove(&h);
-                pred.remove(&h);
-                succ.insert(ph, g1);
-                pred.insert(g1, ph);
-                succ.insert(g1, g2);
-                pred.insert(g2, g1);
-                succ.insert(g2, nh);
-                pred.insert(nh, g2);
-                *on_rim.entry(w).or_default() += 1;
+                rim.succ.remove(&h);
+                rim.pred.remove(&h);
+                rim.link(ph, g1);
+                rim.link(g1, g2);
+                rim.link(g2, nh);
+                *rim.on_rim.entry(w).or_default() += 1;
             }
             region[u] = id;
             grew = true;
@@ -230,6 +201,7 @@ fn grow(
             break;
         }
     }
+    let succ = rim.succ;
     if !succ.contains_key(&start) {
         start = *succ.keys().min().expect("a region has a rim");
     }
@@ -243,6 +215,37 @@ fn grow(
         }
     }
     ring
+}
+
+/// A growing region's boundary: each rim half-edge's successor and predecessor, and how
+/// often each vertex is on the rim.
+#[derive(Default)]
+struct Rim {
+    succ: HashMap<usize, usize>,
+    pred: HashMap<usize, usize>,
+    on_rim: HashMap<u32, u32>,
+}
+
+impl Rim {
+    /// Makes `b` follow `a` along the rim.
+    fn link(&mut self, a: usize, b: usize) {
+        self.succ.insert(a, b);
+        self.pred.insert(b, a);
+    }
+
+    /// Replaces consecutive rim half-edges `a` then `b` by the one half-edge `g` (a
+    /// piece filling the notch between them).
+    fn replace_pair(&mut self, vertex_of: &[u32], a: usize, b: usize, g: usize) {
+        let (before, after) = (self.pred[&a], self.succ[&b]);
+        for x in [a, b] {
+            self.succ.remove(&x);
+            self.pred.remove(&x);
+            *self.on_rim.get_mut(&vertex_of[x]).expect("on the rim") -= 1;
+        }
+        *self.on_rim.entry(vertex_of[g]).or_default() += 1;
+        self.link(before, g);
+        self.link(g, after);
+    }
 }
 
 /// Whether vertex `v` of `ring` lies on the segment between its neighbours there

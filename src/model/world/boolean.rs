@@ -396,7 +396,7 @@ mod tests {
             (part, a, "own whole"),
         ];
         for (x, y, what) in cases {
-            // todo!() in the kernel would panic: these never reach it.
+            // Refused before the kernel runs: these never reach it.
             let e = w.boolean_solution(x, y, Op::Union).expect_err(what);
             match what {
                 "unknown" => assert!(matches!(e, WorldError::UnknownBody(_)), "{e}"),
