@@ -8,7 +8,9 @@
 //! 3. **Euler**: F − E + V = 2(B − H) over the body's connected polyhedra, each of which
 //!    has an even characteristic of at most 2.
 //! 4. **Geometry** (solids only, [`check_solid`]): closed (no edge with one face on both
-//!    sides, no face of fewer than three edges), faces planar within a tolerance and of
+//!    sides, no face of fewer than three edges), faces planar within a tolerance (some
+//!    plane, the Newell plane or one through three spanning vertices, holds every
+//!    vertex within it) and of
 //!    non-zero area, edges of non-zero length, and the surface oriented outward
 //!    (positive volume).
 //!
@@ -143,7 +145,9 @@ pub enum Violation {
     NonPlanar {
         /// The face.
         face: FaceId,
-        /// The largest distance of a vertex from the Newell plane.
+        /// The largest distance of a vertex from the face's plane: the Newell plane,
+        /// or, when that is farther, the plane through three widely spanning vertices
+        /// ([`Body::face_plane_spanning`]); a face is planar when either holds it.
         deviation: f64,
     },
     /// An edge of zero length.
@@ -460,6 +464,13 @@ fn check_euler(b: &Body, out: &mut Vec<Violation>) {
     }
 }
 
+/// The largest distance of a vertex of face `f` from `plane`.
+fn deviation_from(b: &Body, f: FaceId, plane: super::geometry::Plane) -> f64 {
+    b.face_vertices(f)
+        .map(|v| plane.distance(b.position(v)).abs())
+        .fold(0.0, f64::max)
+}
+
 fn check_geometry(b: &Body, tol: f64, out: &mut Vec<Violation>) {
     for e in b.edges() {
         let r = b.edge(e);
@@ -482,10 +493,12 @@ fn check_geometry(b: &Body, tol: f64, out: &mut Vec<Violation>) {
         match b.face_plane_accurate(f) {
             None => out.push(Violation::DegenerateFace { face: f }),
             Some(plane) => {
-                let deviation = b
-                    .face_vertices(f)
-                    .map(|v| plane.distance(b.position(v)).abs())
-                    .fold(0.0, f64::max);
+                let mut deviation = deviation_from(b, f, plane);
+                if deviation > tol
+                    && let Some(spanning) = b.face_plane_spanning(f)
+                {
+                    deviation = deviation.min(deviation_from(b, f, spanning));
+                }
                 if deviation > tol {
                     out.push(Violation::NonPlanar { face: f, deviation });
                 }

@@ -146,6 +146,49 @@ impl Body {
         self.plane_with_normal(f, self.newell_accurate(f))
     }
 
+    /// The plane through three vertices of face `f` that span it widely: the first
+    /// vertex `a`, the vertex `b` farthest from it, and the vertex `c` farthest from the
+    /// line `ab`; its normal from their cross product, computed as
+    /// [`Body::newell_accurate`] computes its terms, and turned to agree with the Newell
+    /// normal. `None` when every vertex lies on one line.
+    ///
+    /// For a sliver face (far longer than wide), whose Newell sum is a difference of
+    /// nearly equal areas, this plane is the better witness of planarity: a vertex off
+    /// the true plane by δ tilts it by about δ over the face's width or length, so
+    /// vertices stay within a few δ of it.
+    pub fn face_plane_spanning(&self, f: FaceId) -> Option<Plane> {
+        let ps: Vec<DVec3> = self.face_vertices(f).map(|v| self.position(v)).collect();
+        let a = *ps.first()?;
+        let b = *ps
+            .iter()
+            .max_by(|p, q| p.distance_squared(a).total_cmp(&q.distance_squared(a)))?;
+        let ab = b - a;
+        let c = *ps.iter().max_by(|p, q| {
+            ab.cross(**p - a)
+                .length_squared()
+                .total_cmp(&ab.cross(**q - a).length_squared())
+        })?;
+        let ac = c - a;
+        let mut acc = [DoubleDouble::default(); 3];
+        for (k, (i, j)) in [(1, 2), (2, 0), (0, 1)].into_iter().enumerate() {
+            acc[k].add_product(ab[i], ac[j]);
+            acc[k].add_product(-ab[j], ac[i]);
+        }
+        let mut n = DVec3::new(acc[0].value(), acc[1].value(), acc[2].value());
+        let len = n.length();
+        if len <= f64::MIN_POSITIVE || !len.is_finite() {
+            return None;
+        }
+        if n.dot(self.newell_accurate(f)) < 0.0 {
+            n = -n;
+        }
+        let normal = n / len;
+        Some(Plane {
+            normal,
+            offset: normal.dot(a),
+        })
+    }
+
     fn plane_with_normal(&self, f: FaceId, n: DVec3) -> Option<Plane> {
         let len = n.length();
         if len <= f64::MIN_POSITIVE || !len.is_finite() {

@@ -15,8 +15,10 @@
 
 use std::collections::{BTreeMap, HashMap};
 
+use glam::DVec3;
+
 use super::point::{Pid, Points};
-use super::{BooleanError, Shell, Source};
+use super::{BooleanError, Shell, Source, round};
 
 /// A kept piece: its points (counter-clockwise seen from outside the result) and the
 /// input face it is part of.
@@ -104,8 +106,19 @@ pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, Boolea
             }
         }
     }
-    // 3. Shells.
-    let nt = kept.len();
+    // 3. Rounding, and the features narrower than it cleared.
+    let pos: Vec<DVec3> = locus.iter().map(|&p| pts.rounded(p)).collect();
+    let eps = round::eps_for(&pos);
+    let mut tris = round::Tris {
+        corner: vertex_of,
+        twin,
+        source: kept.iter().map(|k| k.source).collect(),
+        alive: vec![true; kept.len()],
+    };
+    tris.clean(&pos, eps);
+    let (vertex_of, twin, source) = compact(tris);
+    // 4. Shells.
+    let nt = source.len();
     let mut parent: Vec<u32> = (0..nt as u32).collect();
     for (h, &t) in twin.iter().enumerate() {
         let (a, b) = (find(&mut parent, (h / 3) as u32), find(&mut parent, t / 3));
@@ -118,7 +131,7 @@ pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, Boolea
         let r = find(&mut parent, t);
         shells_of.entry(r).or_default().push(t);
     }
-    // 4. Faces, per shell.
+    // 5. Faces, per shell; shells thinner than the rounding dropped.
     let mut region = vec![NONE; nt];
     let mut shells = Vec::with_capacity(shells_of.len());
     for tris in shells_of.values() {
@@ -128,10 +141,13 @@ pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, Boolea
                 continue;
             }
             let id = faces.len() as u32;
-            let ring = grow(kept, &twin, &vertex_of, &mut region, t, id, next);
-            faces.push((ring, kept[t as usize].source));
+            let ring = grow(&source, &twin, &vertex_of, &mut region, t, id, next);
+            faces.push((ring, source[t as usize]));
         }
-        shells.push(finish(pts, &locus, faces));
+        let shell = finish(pts, &locus, &pos, faces);
+        if !round::thin(&shell.positions, &shell.faces, eps) {
+            shells.push(shell);
+        }
     }
     shells.sort_by_key(|s: &Shell| std::cmp::Reverse(s.faces.len()));
     Ok(shells)
@@ -140,7 +156,7 @@ pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, Boolea
 /// Grows the region of piece `seed` across edges shared with pieces of the same input
 /// face, keeping it a disc; returns its boundary as vertex indices, counter-clockwise.
 fn grow(
-    kept: &[Kept],
+    sources: &[Source],
     twin: &[u32],
     vertex_of: &[u32],
     region: &mut [u32],
@@ -148,7 +164,7 @@ fn grow(
     id: u32,
     next: impl Fn(usize) -> usize,
 ) -> Vec<u32> {
-    let source = kept[seed as usize].source;
+    let source = sources[seed as usize];
     region[seed as usize] = id;
     let s = seed as usize * 3;
     let mut rim = Rim::default();
@@ -167,7 +183,7 @@ fn grow(
             }
             let g = twin[h] as usize;
             let u = g / 3;
-            if region[u] != NONE || kept[u].source != source {
+            if region[u] != NONE || sources[u] != source {
                 continue;
             }
             let g1 = next(g);
@@ -262,7 +278,7 @@ fn straight(pts: &Points, locus: &[Pid], ring: &[u32], v: u32) -> bool {
 
 /// Drops vertices where only two faces meet and the boundary runs straight through, numbers the shell's vertices and rounds
 /// their loci.
-fn finish(pts: &Points, locus: &[Pid], faces: Vec<(Vec<u32>, Source)>) -> Shell {
+fn finish(pts: &Points, locus: &[Pid], pos: &[DVec3], faces: Vec<(Vec<u32>, Source)>) -> Shell {
     let mut faces_at: HashMap<u32, Vec<usize>> = HashMap::new();
     for (fi, (ring, _)) in faces.iter().enumerate() {
         for &v in ring {
@@ -297,7 +313,7 @@ fn finish(pts: &Points, locus: &[Pid], faces: Vec<(Vec<u32>, Source)>) -> Shell 
                 continue;
             }
             let i = *index.entry(v).or_insert_with(|| {
-                positions.push(pts.rounded(locus[v as usize]));
+                positions.push(pos[v as usize]);
                 (positions.len() - 1) as u32
             });
             f.push(i);
@@ -312,6 +328,34 @@ fn finish(pts: &Points, locus: &[Pid], faces: Vec<(Vec<u32>, Source)>) -> Shell 
         sources,
         cavity_of: None,
     }
+}
+
+/// The surviving triangles of `tris`, renumbered: each corner's vertex, each half-edge's
+/// twin and each triangle's source.
+fn compact(tris: round::Tris) -> (Vec<u32>, Vec<u32>, Vec<Source>) {
+    let mut new_of = vec![NONE; tris.alive.len()];
+    let mut n = 0u32;
+    for (t, &alive) in tris.alive.iter().enumerate() {
+        if alive {
+            new_of[t] = n;
+            n += 1;
+        }
+    }
+    let mut corner = Vec::with_capacity(3 * n as usize);
+    let mut twin = Vec::with_capacity(3 * n as usize);
+    let mut source = Vec::with_capacity(n as usize);
+    for (t, &alive) in tris.alive.iter().enumerate() {
+        if !alive {
+            continue;
+        }
+        source.push(tris.source[t]);
+        for h in 3 * t..3 * t + 3 {
+            corner.push(tris.corner[h]);
+            let g = tris.twin[h] as usize;
+            twin.push(3 * new_of[g / 3] + (g % 3) as u32);
+        }
+    }
+    (corner, twin, source)
 }
 
 /// Merges the ends of every edge whose two distinct exact ends round to one locus, and

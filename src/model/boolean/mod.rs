@@ -456,6 +456,7 @@ pub(crate) mod exact;
 mod intersect;
 mod mesh;
 mod point;
+mod round;
 mod split;
 
 use classify::Class;

@@ -52,18 +52,23 @@ impl Points {
         let h = self.homog::<Fx>(def);
         let w = h[3].v;
         let x = DVec3::new(h[0].v / w, h[1].v / w, h[2].v / w);
-        // x = X / W with |ΔX| ≤ e_X, |ΔW| ≤ e_W: |Δx| ≤ (e_X + |x| e_W) / (|W| − e_W).
-        let slack = if w.abs() > 2.0 * h[3].e && x.is_finite() {
-            let ex = h[0].e.max(h[1].e).max(h[2].e);
-            ((ex + x.abs().max_element() * h[3].e) / (w.abs() - h[3].e)) * 2.0
-                + x.abs().max_element() * 4.0 * f64::EPSILON
-        } else {
-            f64::INFINITY
-        };
-        self.approx.push(x);
-        self.slack.push(slack);
         self.filtered.push(h);
         self.defs.push(def);
+        // x = X / W with |ΔX| ≤ e_X, |ΔW| ≤ e_W: |Δx| ≤ (e_X + |x| e_W) / (|W| − e_W).
+        if w.abs() > 2.0 * h[3].e && x.is_finite() {
+            let ex = h[0].e.max(h[1].e).max(h[2].e);
+            let slack = ((ex + x.abs().max_element() * h[3].e) / (w.abs() - h[3].e)) * 2.0
+                + x.abs().max_element() * 4.0 * f64::EPSILON;
+            self.approx.push(x);
+            self.slack.push(slack);
+        } else {
+            // The filter cannot bound the quotient (W is nearly zero: a line nearly
+            // parallel to the plane it meets): the locus rounded exactly, within half
+            // a unit in the last place.
+            let x = self.rounded(id);
+            self.approx.push(x);
+            self.slack.push(x.abs().max_element() * f64::EPSILON);
+        }
         id
     }
 
