@@ -1,17 +1,21 @@
 //! The kept pieces sewn into shells of polygons.
 //!
 //! 1. Each piece's edges are paired with the opposite edges of other pieces. Where more
-//!    than two pieces meet at an edge (bodies that touch along it), pieces of one
-//!    operand pair first, so that touching solids stay separate shells.
+//!    than two pieces meet at an edge (bodies that touch along it), the pieces are
+//!    ordered about the edge exactly and each is paired with its neighbour across a
+//!    wedge of the solid, so that touching solids stay apart; where that would leave
+//!    two edges between the same two vertices (the solid wraps round the edge and
+//!    meets itself there), with its neighbour across a wedge outside it.
 //! 2. A vertex around which the pieces form several fans (solids touching at a point)
 //!    becomes one vertex per fan.
-//! 3. Pieces joined by edges form shells.
-//! 4. Within a shell, the pieces of one input face are merged into polygons: a region
+//! 3. Loci are rounded to the nearest f64, once, and the edges and triangles narrower
+//!    than the rounding can keep are cleared ([`round`]).
+//! 4. Pieces joined by edges form shells.
+//! 5. Within a shell, the pieces of one input face are merged into polygons: a region
 //!    grows across the edges it shares with pieces of the same face for as long as it
-//!    stays a disc (it never swallows a hole or pinches at a vertex).
-//! 5. Vertices where only two faces meet (they lie on the line the faces share) are
-//!    dropped.
-//! 6. Loci are rounded to the nearest f64, once.
+//!    stays a disc (it never swallows a hole or pinches at a vertex). Vertices where
+//!    only two faces meet (they lie on the line the faces share) are dropped; shells
+//!    thinner than the rounding are dropped.
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -51,7 +55,19 @@ pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, Boolea
     for h in 0..nh {
         by_edge.entry((from(h), to(h))).or_default().push(h as u32);
     }
+    let next = round::next;
+    let prev = round::prev;
     let mut twin = vec![NONE; nh];
+    let link = |twin: &mut Vec<u32>, pairs: &[(u32, u32)]| {
+        for &(o, i) in pairs {
+            twin[o as usize] = i;
+            twin[i as usize] = o;
+        }
+    };
+    // Edges where several sheets meet: the pairing into the solid's wedges, and the
+    // other one (into the wedges outside), used where the first would give two edges
+    // between the same two vertices.
+    let mut sheets: Vec<Pairings> = Vec::new();
     for (&(p, q), outs) in &by_edge {
         if p > q {
             continue;
@@ -61,50 +77,35 @@ pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, Boolea
             return Err(open());
         }
         if outs.len() == 1 {
-            twin[outs[0] as usize] = ins[0];
-            twin[ins[0] as usize] = outs[0];
+            link(&mut twin, &[(outs[0], ins[0])]);
             continue;
         }
-        let mut ins_left: Vec<u32> = ins.clone();
-        let mut outs_left: Vec<u32> = Vec::new();
-        for &o in outs {
-            let op = kept[o as usize / 3].source.operand;
-            if let Some(k) = ins_left
-                .iter()
-                .position(|&i| kept[i as usize / 3].source.operand == op)
-            {
-                let i = ins_left.remove(k);
-                twin[o as usize] = i;
-                twin[i as usize] = o;
-            } else {
-                outs_left.push(o);
+        let third = |h: u32| from(prev(h as usize));
+        match radial(pts, p, q, outs, ins, third) {
+            Some((inside, outside)) => {
+                link(&mut twin, &inside);
+                sheets.push((inside, outside));
             }
-        }
-        for (o, i) in outs_left.into_iter().zip(ins_left) {
-            twin[o as usize] = i;
-            twin[i as usize] = o;
+            None => link(&mut twin, &by_operand(kept, outs, ins)),
         }
     }
-    let next = |h: usize| h - h % 3 + (h % 3 + 1) % 3;
-    let prev = |h: usize| h - h % 3 + (h % 3 + 2) % 3;
     // 2. One vertex per fan: corner h (the origin of half-edge h) gets a vertex index.
-    let mut vertex_of = vec![NONE; nh];
-    let mut locus: Vec<Pid> = Vec::new();
-    for h0 in 0..nh {
-        if vertex_of[h0] != NONE {
-            continue;
+    let (mut vertex_of, mut locus) = fans(&twin, from, prev);
+    let doubled: Vec<usize> = (0..sheets.len())
+        .filter(|&k| {
+            let ends: Vec<(u32, u32)> = sheets[k]
+                .0
+                .iter()
+                .map(|&(o, _)| (vertex_of[o as usize], vertex_of[next(o as usize)]))
+                .collect();
+            (1..ends.len()).any(|i| ends[..i].contains(&ends[i]))
+        })
+        .collect();
+    if !doubled.is_empty() {
+        for k in doubled {
+            link(&mut twin, &sheets[k].1);
         }
-        let v = locus.len() as u32;
-        locus.push(from(h0));
-        let mut h = h0;
-        loop {
-            vertex_of[h] = v;
-            // The next outgoing half-edge about the same point.
-            h = twin[prev(h)] as usize;
-            if h == h0 || vertex_of[h] != NONE {
-                break;
-            }
-        }
+        (vertex_of, locus) = fans(&twin, from, prev);
     }
     // 3. Rounding, and the features narrower than it cleared.
     let pos: Vec<DVec3> = locus.iter().map(|&p| pts.rounded(p)).collect();
@@ -151,6 +152,129 @@ pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, Boolea
     }
     shells.sort_by_key(|s: &Shell| std::cmp::Reverse(s.faces.len()));
     Ok(shells)
+}
+
+/// Pairs of half-edges (from `p` to `q`, from `q` to `p`) made twins.
+type Pairing = Vec<(u32, u32)>;
+
+/// The two pairings at an edge where several sheets meet: into the solid's wedges, and
+/// into the wedges outside it.
+type Pairings = (Pairing, Pairing);
+
+/// Pairs the half-edges `outs` (from `p` to `q`) with `ins` (from `q` to `p`) of one
+/// operand first, then the rest in order.
+fn by_operand(kept: &[Kept], outs: &[u32], ins: &[u32]) -> Pairing {
+    let mut ins_left: Vec<u32> = ins.to_vec();
+    let mut outs_left: Vec<u32> = Vec::new();
+    let mut pairs = Vec::with_capacity(outs.len());
+    for &o in outs {
+        let op = kept[o as usize / 3].source.operand;
+        if let Some(k) = ins_left
+            .iter()
+            .position(|&i| kept[i as usize / 3].source.operand == op)
+        {
+            pairs.push((o, ins_left.remove(k)));
+        } else {
+            outs_left.push(o);
+        }
+    }
+    pairs.extend(outs_left.into_iter().zip(ins_left));
+    pairs
+}
+
+/// The two pairings of the half-edges `outs` (from `p` to `q`) with `ins` (from `q` to
+/// `p`) that keep the surface from crossing itself at the edge, found by ordering the
+/// pieces about the edge exactly (`third(h)` is the corner of `h`'s piece off the
+/// edge): each out with the piece met first turning from it into the solid, and each
+/// out with the piece met first turning from it out of the solid. `None` if the pieces
+/// do not alternate out, in, out, … about the edge (two coincide).
+fn radial(
+    pts: &Points,
+    p: Pid,
+    q: Pid,
+    outs: &[u32],
+    ins: &[u32],
+    third: impl Fn(u32) -> Pid,
+) -> Option<Pairings> {
+    let mut all: Vec<(u32, bool)> = outs.iter().map(|&h| (h, true)).collect();
+    all.extend(ins.iter().map(|&h| (h, false)));
+    let r = third(all[0].0);
+    let axis = super::split::dominant_axis(pts, [p, q, r]);
+    let r_side = pts.orient2d(axis, [p, q, r]);
+    // Angle θ about p → q (right-handed), from r at θ = 0: 0 for θ = 0, 1 for θ in
+    // (0, π), 2 for θ = π, 3 for θ in (π, 2π).
+    let half = |c: Pid| match pts.side_any([p, q, r], c) {
+        1 => 1,
+        -1 => 3,
+        _ if pts.orient2d(axis, [p, q, c]) == r_side => 0,
+        _ => 2,
+    };
+    let mut keyed: Vec<(u8, u32, bool)> = all
+        .iter()
+        .map(|&(h, out)| (half(third(h)), h, out))
+        .collect();
+    let mut tie = false;
+    keyed.sort_by(|x, y| {
+        x.0.cmp(&y.0).then_with(|| {
+            if x.1 == y.1 {
+                return std::cmp::Ordering::Equal;
+            }
+            // Within one half, y is further round than x if it is in front of the
+            // plane through the edge and x.
+            match pts.side_any([p, q, third(x.1)], third(y.1)) {
+                1 => std::cmp::Ordering::Less,
+                -1 => std::cmp::Ordering::Greater,
+                _ => {
+                    tie = true;
+                    x.1.cmp(&y.1)
+                }
+            }
+        })
+    });
+    let n = keyed.len();
+    if tie || (0..n).any(|k| keyed[k].2 == keyed[(k + 1) % n].2) {
+        return None;
+    }
+    // A piece from p to q has the solid just before it in θ, one from q to p just
+    // after it.
+    let mut inside = Vec::with_capacity(n / 2);
+    let mut outside = Vec::with_capacity(n / 2);
+    for k in 0..n {
+        if keyed[k].2 {
+            inside.push((keyed[k].1, keyed[(k + n - 1) % n].1));
+            outside.push((keyed[k].1, keyed[(k + 1) % n].1));
+        }
+    }
+    Some((inside, outside))
+}
+
+/// One vertex per fan of pieces about a point: the vertex of each corner (the origin of
+/// each half-edge) and the locus of each vertex.
+fn fans(
+    twin: &[u32],
+    from: impl Fn(usize) -> Pid,
+    prev: impl Fn(usize) -> usize,
+) -> (Vec<u32>, Vec<Pid>) {
+    let nh = twin.len();
+    let mut vertex_of = vec![NONE; nh];
+    let mut locus: Vec<Pid> = Vec::new();
+    for h0 in 0..nh {
+        if vertex_of[h0] != NONE {
+            continue;
+        }
+        let v = locus.len() as u32;
+        locus.push(from(h0));
+        let mut h = h0;
+        loop {
+            vertex_of[h] = v;
+            // The next outgoing half-edge about the same point.
+            h = twin[prev(h)] as usize;
+            if h == h0 || vertex_of[h] != NONE {
+                break;
+            }
+        }
+    }
+    (vertex_of, locus)
 }
 
 /// Grows the region of piece `seed` across edges shared with pieces of the same input

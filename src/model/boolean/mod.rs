@@ -33,10 +33,14 @@
 //!    or outside by the winding number of a ray whose direction is perturbed
 //!    symbolically. Everted operands (an unbounded interior) are followed the same way.
 //! 5. **Assembly** ([`assemble`]): the pieces each operation keeps are sewn along their
-//!    edges into shells; pieces of one input face merge back into polygons (a face with
-//!    a hole becomes two polygons, since a winged-edge face is one ring); vertices where
+//!    edges into shells (where bodies touch along an edge, the pieces about it are
+//!    ordered exactly and paired across the solid's wedges); loci are rounded, once, to
+//!    the nearest f64, and what the rounding cannot keep (edges and slivers narrower
+//!    than a few hundred units in the last place, shells as thin) is cleared
+//!    ([`round`]); pieces of one input face merge back into polygons (a face with a
+//!    hole becomes two polygons, since a winged-edge face is one ring); vertices where
 //!    two faces meet in a straight line are dropped; cavities are matched with the
-//!    shell that holds them; loci are rounded, once, to the nearest f64.
+//!    shell that holds them.
 //!
 //! Every output face records the input face it is a piece of ([`Source`]).
 

@@ -224,6 +224,18 @@ impl Points {
         Side { pts: self, tri, p }.sign() * self.w_sign(p)
     }
 
+    /// Which side of the plane through `tri` (counter-clockwise seen from the front)
+    /// the point `p` lies, for any points: 1 in front, −1 behind, 0 on it (or when
+    /// `tri` is collinear). Slower than [`Points::side`], which needs input corners.
+    pub fn side_any(&self, tri: [Pid; 3], p: Pid) -> i8 {
+        if tri.iter().all(|&q| self.is_input(q)) {
+            return self.side(tri, p);
+        }
+        let four = [tri[0], tri[1], tri[2], p];
+        let w: i8 = four.iter().map(|&q| self.w_sign(q)).product();
+        -(Orient4 { pts: self, p: four }.sign() * w)
+    }
+
     /// The orientation of three points in the projection dropping coordinate `axis`:
     /// 1 counter-clockwise, −1 clockwise, 0 collinear (axes in cyclic order, so the
     /// projection along +axis keeps the sense of rotation seen from +axis).
@@ -384,6 +396,36 @@ impl Poly for Orient2<'_> {
     }
 }
 
+/// det [[X_i, Y_i, Z_i, W_i]] of four points: for points of positive W, Shewchuk's
+/// orient3d of the first three and the fourth.
+struct Orient4<'a> {
+    pts: &'a Points,
+    p: [Pid; 4],
+}
+
+impl Poly for Orient4<'_> {
+    fn eval<R: Ring>(&self) -> R {
+        let h = self.p.map(|q| self.pts.homog_of::<R>(q));
+        // Laplace expansion by the 2×2 minors of the first two rows and of the last two.
+        let minor = |r: usize, s: usize, i: usize, j: usize| {
+            h[r][i].clone() * h[s][j].clone() - h[r][j].clone() * h[s][i].clone()
+        };
+        let pairs = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+        let mut total = R::of(0.0);
+        for (k, &(i, j)) in pairs.iter().enumerate() {
+            let (a, b) = pairs[5 - k];
+            let term = minor(0, 1, i, j) * minor(2, 3, a, b);
+            // The sign of the permutation (i, j, a, b).
+            total = if k == 1 || k == 4 {
+                total - term
+            } else {
+                total + term
+            };
+        }
+        total
+    }
+}
+
 /// Component `k` of the normal of the triangle through input points `tri`.
 struct NormalComponent<'a> {
     pts: &'a Points,
@@ -440,6 +482,48 @@ mod tests {
                 .map(|p| [Fx::of(p.x), Fx::of(p.y), Fx::of(p.z), Fx::of(1.0)])
                 .collect(),
         }
+    }
+
+    /// The orientation of four points, some constructed, agrees with Shewchuk's on
+    /// their (here exact) loci, in every order of the four.
+    #[test]
+    fn four_points_orient_as_their_loci() {
+        let mut p = points(&[
+            DVec3::new(0.25, 0.5, -1.0),
+            DVec3::new(0.25, 0.5, 3.0),
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::Y,
+            DVec3::new(1.0, 1.0, 1.0),
+            DVec3::new(-2.0, 0.5, 0.75),
+        ]);
+        // x = (0.25, 0.5, 0), on the plane z = 0.
+        let x = p.add(Def::Lpi {
+            line: [0, 1],
+            plane: [2, 3, 4],
+        });
+        let at = |q: Pid| {
+            if q == x {
+                DVec3::new(0.25, 0.5, 0.0)
+            } else {
+                p.input[q as usize]
+            }
+        };
+        let ids = [x, 2, 3, 5, 6, 4];
+        for &a in &ids {
+            for &b in &ids {
+                for &c in &ids {
+                    for &d in &ids {
+                        let o = robust::orient3d(c3(at(a)), c3(at(b)), c3(at(c)), c3(at(d)));
+                        let want = -(o.partial_cmp(&0.0).map_or(0, |o| o as i8));
+                        assert_eq!(p.side_any([a, b, c], d), want, "{a} {b} {c} {d}");
+                    }
+                }
+            }
+        }
+        // x lies on the plane of corners 2, 3 and 4.
+        assert_eq!(p.side_any([x, 3, 4], 2), 0);
+        assert_eq!(p.side_any([3, x, 5], 4), -p.side_any([x, 3, 5], 4));
     }
 
     #[test]

@@ -49,13 +49,15 @@ pub(crate) struct Tris {
     pub alive: Vec<bool>,
 }
 
+/// The half-edge after `h` in its triangle.
 #[inline]
-fn next(h: usize) -> usize {
+pub(crate) fn next(h: usize) -> usize {
     h - h % 3 + (h % 3 + 1) % 3
 }
 
+/// The half-edge before `h` in its triangle.
 #[inline]
-fn prev(h: usize) -> usize {
+pub(crate) fn prev(h: usize) -> usize {
     h - h % 3 + (h % 3 + 2) % 3
 }
 
