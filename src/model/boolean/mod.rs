@@ -441,8 +441,16 @@ fn check_self(
             let mut probe = intersect::Traces::default();
             let before = pts.defs.len();
             probe.pair(pts, m, i as u32, m, j as u32);
+            // Triangles of a valid body that share no corner may still touch at one
+            // point: where a face's triangle has a side through a vertex of the face
+            // (collinear vertices). Only a contact of positive length is a crossing.
+            let crossing = probe
+                .segs_a
+                .values()
+                .flatten()
+                .any(|&[p, q]| distinct(pts, p, q));
             pts.truncate(before);
-            if !probe.segs_a.is_empty() {
+            if crossing {
                 return Err(BooleanError::SelfIntersecting {
                     operand: which,
                     faces: [m.face[i], m.face[j]],
@@ -451,6 +459,12 @@ fn check_self(
         }
     }
     Ok(())
+}
+
+/// Whether points `p` and `q` differ in some coordinate (exactly).
+fn distinct(pts: &Points, p: Pid, q: Pid) -> bool {
+    p != q
+        && (0..3).any(|k| split::coord_cmp(pts, k, pts.defs[p as usize], pts.defs[q as usize]) != 0)
 }
 
 mod assemble;
@@ -464,7 +478,7 @@ mod round;
 mod split;
 
 use classify::Class;
-use point::Points;
+use point::{Pid, Points};
 
 #[cfg(test)]
 mod tests;
