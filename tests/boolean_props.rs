@@ -217,7 +217,6 @@ fn everted_operands() {
 }
 
 #[test]
-#[ignore = "known failure: a face with a hole is split along its triangulation, leaving a vertex off the 1/1024 grid; issue 29 open"]
 fn successive_differences_keep_the_exact_grid_volume() {
     if only_case().is_some() {
         return;

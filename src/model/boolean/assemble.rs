@@ -13,7 +13,8 @@
 //! 4. Pieces joined by edges form shells.
 //! 5. Within a shell, the pieces of one input face are merged into polygons: a region
 //!    grows across the edges it shares with pieces of the same face for as long as it
-//!    stays a disc (it never swallows a hole or pinches at a vertex). Vertices where
+//!    stays a disc (it never swallows a hole or pinches at a vertex); a face around one
+//!    hole is then cut again through its own corners ([`holes`]). Vertices where
 //!    only two faces meet (they lie on the line the faces share) are dropped; shells
 //!    thinner than the rounding are dropped.
 
@@ -22,7 +23,7 @@ use std::collections::{BTreeMap, HashMap};
 use glam::DVec3;
 
 use super::point::{Pid, Points};
-use super::{BooleanError, Shell, Source, round};
+use super::{BooleanError, Shell, Source, holes, round};
 
 /// A kept piece: its points (counter-clockwise seen from outside the result) and the
 /// input face it is part of.
@@ -145,6 +146,7 @@ pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, Boolea
             let ring = grow(&source, &twin, &vertex_of, &mut region, t, id, next);
             faces.push((ring, source[t as usize]));
         }
+        let faces = holes::recut(pts, &locus, faces);
         let shell = finish(pts, &locus, &pos, faces);
         if !round::thin(&shell.positions, &shell.faces, eps) {
             shells.push(shell);

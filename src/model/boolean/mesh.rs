@@ -82,11 +82,13 @@ fn mesh(
     let mut m = Mesh::default();
     let mut ring: Vec<Pid> = Vec::new();
     let mut six_volume = 0.0;
+    let mut first_tri = vec![u32::MAX; body.faces.slots()];
     for f in body.faces() {
         ring.clear();
         ring.extend(body.face_vertices(f).map(|v| pid[v.index()]));
         let serial = body.face_serial(f);
         let first = m.tris.len();
+        first_tri[f.index()] = first as u32;
         triangulate(pts, &ring, &mut m.tris).map_err(|()| BooleanError::BadFace {
             operand: which,
             face: serial,
@@ -98,12 +100,79 @@ fn mesh(
             m.boxes.push([p.min(q).min(r), p.max(q).max(r)]);
         }
     }
+    merge_flat_neighbours(pts, body, &pid, &first_tri, &mut m);
     m.everted = six_volume < 0.0;
     m.bounds = m.boxes.iter().fold(
         [DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)],
         |[lo, hi], [a, b]| [lo.min(*a), hi.max(*b)],
     );
     Ok(m)
+}
+
+/// Faces of the body that meet along an edge and lie in one plane (exactly) are one
+/// face to the boolean: their triangles take the serial of the first of them, so their
+/// pieces merge into one polygon. (A face split by an earlier boolean around a hole
+/// would otherwise keep its cut, and every later cut across it would leave a corner
+/// there.)
+fn merge_flat_neighbours(
+    pts: &Points,
+    body: &crate::model::Body,
+    pid: &[Pid],
+    first_tri: &[u32],
+    m: &mut Mesh,
+) {
+    let mut parent: HashMap<usize, usize> = HashMap::new();
+    fn find(parent: &HashMap<usize, usize>, mut x: usize) -> usize {
+        while let Some(&p) = parent.get(&x) {
+            if p == x {
+                break;
+            }
+            x = p;
+        }
+        x
+    }
+    let mut any = false;
+    for e in body.edges() {
+        let [f, g] = body.edge(e).face;
+        if f == g {
+            continue;
+        }
+        let tri = m.tris[first_tri[f.index()] as usize];
+        if body
+            .face_vertices(g)
+            .all(|v| pts.side(tri, pid[v.index()]) == 0)
+        {
+            let (a, b) = (find(&parent, f.index()), find(&parent, g.index()));
+            if a != b {
+                parent.insert(a.max(b), a.min(b));
+                parent.entry(a.min(b)).or_insert(a.min(b));
+                any = true;
+            }
+        }
+    }
+    if !any {
+        return;
+    }
+    // The smallest serial of each group stands for it.
+    let mut name: HashMap<usize, Serial> = HashMap::new();
+    for f in body.faces() {
+        let r = find(&parent, f.index());
+        let s = body.face_serial(f);
+        name.entry(r)
+            .and_modify(|n| {
+                if s.0 < n.0 {
+                    *n = s;
+                }
+            })
+            .or_insert(s);
+    }
+    let mut of_serial: HashMap<Serial, Serial> = HashMap::new();
+    for f in body.faces() {
+        of_serial.insert(body.face_serial(f), name[&find(&parent, f.index())]);
+    }
+    for s in &mut m.face {
+        *s = of_serial[s];
+    }
 }
 
 /// Refuses a body that does not bound a volume: no faces, fewer than four, an edge with

@@ -471,6 +471,7 @@ mod assemble;
 mod broad;
 mod classify;
 pub(crate) mod exact;
+mod holes;
 mod intersect;
 mod mesh;
 mod point;

@@ -211,3 +211,31 @@ fn boxes_that_coincide_before_rounding() {
         assert!(d.abs() < 1e-12, "turn {k}: A − B has volume {d}");
     }
 }
+
+/// A pocket cut into the middle of a face leaves that face with a hole: it becomes two
+/// polygons cut through corners (no vertex where a cut met a triangulation's diagonal),
+/// so every vertex is a corner of the box or of the pocket, on the integer grid.
+#[test]
+fn a_pocket_leaves_a_face_with_a_hole_as_two_polygons_through_corners() {
+    let mut s = Serials::new();
+    let a = boxed(&mut s, DVec3::splat(4.0));
+    let b = boxed(&mut s, DVec3::new(2.0, 2.0, 3.0));
+    let (pa, pb) = (moved(DVec3::splat(2.0)), moved(DVec3::new(2.0, 2.0, 3.5)));
+    let d = boolean(at(&a, pa), at(&b, pb), Op::Difference).unwrap();
+    assert_eq!(d.shells.len(), 1);
+    let sh = &d.shells[0];
+    assert_eq!(sh.positions.len(), 16, "{sh:?}");
+    assert!(sh.positions.iter().all(|p| *p == p.round()), "{sh:?}");
+    // Five whole faces of the box, the top in two, four walls and a floor.
+    assert_eq!(sh.faces.len(), 12, "{sh:?}");
+    assert_eq!(volume(&d), 64.0 - 8.0);
+    let top: Vec<_> = (0..sh.faces.len())
+        .filter(|&i| {
+            sh.faces[i]
+                .iter()
+                .all(|&v| sh.positions[v as usize].z == 4.0)
+        })
+        .collect();
+    assert_eq!(top.len(), 2);
+    assert!(top.iter().all(|&i| sh.sources[i] == sh.sources[top[0]]));
+}
