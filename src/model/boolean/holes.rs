@@ -157,6 +157,9 @@ fn cut_through_corners(
     edges: &std::collections::HashSet<(u32, u32)>,
 ) -> Option<Vec<Vec<u32>>> {
     let loops = loops(rings)?;
+    if loops.is_empty() {
+        return None; // the faces close on themselves: nothing to cut
+    }
     if loops.len() == 1 {
         // A disc the merge left in parts (its growth pinched on the way): one polygon.
         return loops.into_iter().next().map(|l| vec![l]);
