@@ -37,6 +37,16 @@ pub(crate) fn recut(
     for (i, (_, s)) in faces.iter().enumerate() {
         by_source.entry(key(*s)).or_default().push(i);
     }
+    // Groups of two faces or more: the merge left those in parts.
+    let groups: Vec<Vec<usize>> = by_source
+        .values()
+        .filter(|members| members.len() > 1)
+        .flat_map(|members| adjacent_groups(&faces, members))
+        .filter(|group| group.len() > 1)
+        .collect();
+    if groups.is_empty() {
+        return faces;
+    }
     // Every edge of the shell: a chord may not join two vertices an edge joins already.
     let mut edges: std::collections::HashSet<(u32, u32)> = std::collections::HashSet::new();
     for (r, _) in &faces {
@@ -46,20 +56,12 @@ pub(crate) fn recut(
         }
     }
     let mut replaced: HashMap<usize, Option<Vec<Vec<u32>>>> = HashMap::new();
-    for members in by_source.values() {
-        if members.len() < 2 {
-            continue;
-        }
-        for group in adjacent_groups(&faces, members) {
-            if group.len() < 2 {
-                continue;
-            }
-            let rings: Vec<&Vec<u32>> = group.iter().map(|&i| &faces[i].0).collect();
-            if let Some(two) = cut_through_corners(pts, locus, &rings, &edges) {
-                replaced.insert(group[0], Some(two));
-                for &i in &group[1..] {
-                    replaced.insert(i, None);
-                }
+    for group in groups {
+        let rings: Vec<&Vec<u32>> = group.iter().map(|&i| &faces[i].0).collect();
+        if let Some(new) = cut_through_corners(pts, locus, &rings, &edges) {
+            replaced.insert(group[0], Some(new));
+            for &i in &group[1..] {
+                replaced.insert(i, None);
             }
         }
     }
