@@ -116,10 +116,7 @@ impl Body {
             // p × q about the origin vertex: each component a difference of products.
             let p = self.position(self.origin(u)) - origin;
             let q = self.position(self.dest(u)) - origin;
-            for (k, (i, j)) in [(1, 2), (2, 0), (0, 1)].into_iter().enumerate() {
-                acc[k].add_product(p[i], q[j]);
-                acc[k].add_product(-p[j], q[i]);
-            }
+            add_cross(&mut acc, p, q);
         }
         DVec3::new(acc[0].value(), acc[1].value(), acc[2].value())
     }
@@ -170,10 +167,7 @@ impl Body {
         })?;
         let ac = c - a;
         let mut acc = [DoubleDouble::default(); 3];
-        for (k, (i, j)) in [(1, 2), (2, 0), (0, 1)].into_iter().enumerate() {
-            acc[k].add_product(ab[i], ac[j]);
-            acc[k].add_product(-ab[j], ac[i]);
-        }
+        add_cross(&mut acc, ab, ac);
         let mut n = DVec3::new(acc[0].value(), acc[1].value(), acc[2].value());
         let len = n.length();
         if len <= f64::MIN_POSITIVE || !len.is_finite() {
@@ -281,6 +275,14 @@ impl Body {
                 _ => false,
             }
         })
+    }
+}
+
+/// Adds `p × q` to `acc`, each component a difference of products split exactly.
+fn add_cross(acc: &mut [DoubleDouble; 3], p: DVec3, q: DVec3) {
+    for (k, (i, j)) in [(1, 2), (2, 0), (0, 1)].into_iter().enumerate() {
+        acc[k].add_product(p[i], q[j]);
+        acc[k].add_product(-p[j], q[i]);
     }
 }
 

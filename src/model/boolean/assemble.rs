@@ -23,6 +23,7 @@ use std::collections::{BTreeMap, HashMap};
 use glam::DVec3;
 
 use super::point::{Pid, Points};
+use super::sets::Sets;
 use super::{BooleanError, Shell, Source, holes, round};
 
 /// A kept piece: its points (counter-clockwise seen from outside the result) and the
@@ -31,14 +32,6 @@ use super::{BooleanError, Shell, Source, holes, round};
 pub(crate) struct Kept {
     pub tri: [Pid; 3],
     pub source: Source,
-}
-
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        parent[x as usize] = parent[parent[x as usize] as usize];
-        x = parent[x as usize];
-    }
-    x
 }
 
 const NONE: u32 = u32::MAX;
@@ -121,16 +114,13 @@ pub(crate) fn assemble(pts: &Points, kept: &[Kept]) -> Result<Vec<Shell>, Boolea
     let (vertex_of, twin, source) = compact(tris);
     // 4. Shells.
     let nt = source.len();
-    let mut parent: Vec<u32> = (0..nt as u32).collect();
+    let mut sets = Sets::new(nt);
     for (h, &t) in twin.iter().enumerate() {
-        let (a, b) = (find(&mut parent, (h / 3) as u32), find(&mut parent, t / 3));
-        if a != b {
-            parent[a.max(b) as usize] = a.min(b);
-        }
+        sets.join((h / 3) as u32, t / 3);
     }
     let mut shells_of: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
     for t in 0..nt as u32 {
-        let r = find(&mut parent, t);
+        let r = sets.find(t);
         shells_of.entry(r).or_default().push(t);
     }
     // 5. Faces, per shell; shells thinner than the rounding dropped.
@@ -498,15 +488,12 @@ fn collapse(
     if !short {
         return (positions, faces, sources);
     }
-    let mut parent: Vec<u32> = (0..positions.len() as u32).collect();
+    let mut sets = Sets::new(positions.len());
     for f in &faces {
         for k in 0..f.len() {
             let (a, b) = (f[k], f[(k + 1) % f.len()]);
             if positions[a as usize] == positions[b as usize] {
-                let (x, y) = (find(&mut parent, a), find(&mut parent, b));
-                if x != y {
-                    parent[x.max(y) as usize] = x.min(y);
-                }
+                sets.join(a, b);
             }
         }
     }
@@ -517,7 +504,7 @@ fn collapse(
     for (f, src) in faces.into_iter().zip(sources) {
         let mut ring: Vec<u32> = Vec::with_capacity(f.len());
         for v in f {
-            let r = find(&mut parent, v);
+            let r = sets.find(v);
             if ring.last() != Some(&r) {
                 ring.push(r);
             }

@@ -14,6 +14,7 @@ use super::BooleanError;
 use super::intersect::{EdgeKey, Traces, edge_key};
 use super::mesh::Mesh;
 use super::point::{Def, Pid, Points};
+use super::sets::Sets;
 use super::split::{cut, dominant_axis};
 
 /// Where a piece of one surface lies with respect to the other operand.
@@ -82,14 +83,6 @@ pub(crate) fn pieces(
     Ok(out)
 }
 
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        parent[x as usize] = parent[parent[x as usize] as usize];
-        x = parent[x as usize];
-    }
-    x
-}
-
 /// The class of every piece of `mine` with respect to `other`.
 pub(crate) fn classify(
     pts: &mut Points,
@@ -98,7 +91,7 @@ pub(crate) fn classify(
     other: &Mesh,
 ) -> Result<Vec<Class>, BooleanError> {
     let n = pieces.tris.len();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut sets = Sets::new(n);
     let mut by_edge: HashMap<(Pid, Pid), u32> = HashMap::with_capacity(3 * n);
     for (i, t) in pieces.tris.iter().enumerate() {
         for k in 0..3 {
@@ -112,17 +105,14 @@ pub(crate) fn classify(
                 continue;
             }
             if let Some(&j) = by_edge.get(&(q, p)) {
-                let (a, b) = (find(&mut parent, i as u32), find(&mut parent, j));
-                if a != b {
-                    parent[a.max(b) as usize] = a.min(b);
-                }
+                sets.join(i as u32, j);
             }
         }
     }
     let mut class_of_root: HashMap<u32, Class> = HashMap::new();
     let mut classes = Vec::with_capacity(n);
     for i in 0..n {
-        let r = find(&mut parent, i as u32);
+        let r = sets.find(i as u32);
         let c = match class_of_root.get(&r) {
             Some(&c) => c,
             None => {

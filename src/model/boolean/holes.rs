@@ -20,6 +20,7 @@ use std::collections::{BTreeMap, HashMap};
 
 use super::Source;
 use super::point::{Pid, Points};
+use super::sets::Sets;
 
 /// The most corners a face may have to be cut again (the chord search is quadratic
 /// in them, each chord tested against every boundary edge).
@@ -87,34 +88,26 @@ fn key(s: Source) -> SourceKey {
 
 /// The members that share edges, in groups (each sorted).
 fn adjacent_groups(faces: &[(Vec<u32>, Source)], members: &[usize]) -> Vec<Vec<usize>> {
-    let mut owner: HashMap<(u32, u32), usize> = HashMap::new();
-    for &i in members {
+    // Member k of `members` is set k.
+    let mut owner: HashMap<(u32, u32), u32> = HashMap::new();
+    for (k, &i) in members.iter().enumerate() {
         let r = &faces[i].0;
-        for k in 0..r.len() {
-            owner.insert((r[k], r[(k + 1) % r.len()]), i);
+        for e in 0..r.len() {
+            owner.insert((r[e], r[(e + 1) % r.len()]), k as u32);
         }
     }
-    let mut parent: HashMap<usize, usize> = members.iter().map(|&i| (i, i)).collect();
-    fn find(parent: &mut HashMap<usize, usize>, mut x: usize) -> usize {
-        while parent[&x] != x {
-            x = parent[&x];
-        }
-        x
-    }
-    for &i in members {
+    let mut sets = Sets::new(members.len());
+    for (k, &i) in members.iter().enumerate() {
         let r = &faces[i].0;
-        for k in 0..r.len() {
-            if let Some(&j) = owner.get(&(r[(k + 1) % r.len()], r[k])) {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                if a != b {
-                    parent.insert(a.max(b), a.min(b));
-                }
+        for e in 0..r.len() {
+            if let Some(&j) = owner.get(&(r[(e + 1) % r.len()], r[e])) {
+                sets.join(k as u32, j);
             }
         }
     }
-    let mut groups: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-    for &i in members {
-        let r = find(&mut parent, i);
+    let mut groups: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
+    for (k, &i) in members.iter().enumerate() {
+        let r = sets.find(k as u32);
         groups.entry(r).or_default().push(i);
     }
     groups.into_values().collect()

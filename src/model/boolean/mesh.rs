@@ -16,6 +16,7 @@ use glam::DVec3;
 
 use super::exact::{Fx, Ring};
 use super::point::{Def, Pid, Points};
+use super::sets::Sets;
 use super::{BooleanError, Operand, Which};
 use crate::model::ids::Serial;
 
@@ -121,16 +122,7 @@ fn merge_flat_neighbours(
     first_tri: &[u32],
     m: &mut Mesh,
 ) {
-    let mut parent: HashMap<usize, usize> = HashMap::new();
-    fn find(parent: &HashMap<usize, usize>, mut x: usize) -> usize {
-        while let Some(&p) = parent.get(&x) {
-            if p == x {
-                break;
-            }
-            x = p;
-        }
-        x
-    }
+    let mut sets = Sets::new(body.faces.slots());
     let mut any = false;
     for e in body.edges() {
         let [f, g] = body.edge(e).face;
@@ -142,21 +134,16 @@ fn merge_flat_neighbours(
             .face_vertices(g)
             .all(|v| pts.side(tri, pid[v.index()]) == 0)
         {
-            let (a, b) = (find(&parent, f.index()), find(&parent, g.index()));
-            if a != b {
-                parent.insert(a.max(b), a.min(b));
-                parent.entry(a.min(b)).or_insert(a.min(b));
-                any = true;
-            }
+            any |= sets.join(f.index() as u32, g.index() as u32);
         }
     }
     if !any {
         return;
     }
     // The smallest serial of each group stands for it.
-    let mut name: HashMap<usize, Serial> = HashMap::new();
+    let mut name: HashMap<u32, Serial> = HashMap::new();
     for f in body.faces() {
-        let r = find(&parent, f.index());
+        let r = sets.find(f.index() as u32);
         let s = body.face_serial(f);
         name.entry(r)
             .and_modify(|n| {
@@ -168,7 +155,7 @@ fn merge_flat_neighbours(
     }
     let mut of_serial: HashMap<Serial, Serial> = HashMap::new();
     for f in body.faces() {
-        of_serial.insert(body.face_serial(f), name[&find(&parent, f.index())]);
+        of_serial.insert(body.face_serial(f), name[&sets.find(f.index() as u32)]);
     }
     for s in &mut m.face {
         *s = of_serial[s];

@@ -476,6 +476,7 @@ mod intersect;
 mod mesh;
 mod point;
 mod round;
+mod sets;
 mod split;
 
 use classify::Class;
