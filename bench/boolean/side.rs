@@ -9,6 +9,8 @@
 //!   `NAME.tri.off` (triangles), and the times to `D/winged.json`.
 //!
 //! `cargo run --release --example boolean_side -- write --dir /tmp/boolean-side`
+//!
+//! `RUST_LOG=winged::model::boolean=debug` logs each boolean's phases to stderr.
 
 #[path = "side/off.rs"]
 mod off;
@@ -64,6 +66,10 @@ enum Command {
 fn main() -> ExitCode {
     // One line per panic (the kernel's panics are caught and reported per scene).
     std::panic::set_hook(Box::new(|info| eprintln!("panic: {info}")));
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_writer(std::io::stderr)
+        .init();
     let result = match Args::parse().command {
         Command::Write { dir, sizes } => write(&dir, &sizes),
         Command::Run { dir, repeat, only } => run(&dir, repeat.max(1), only.as_deref()),

@@ -18,7 +18,9 @@
 //!    only two faces meet (they lie on the line the faces share) are dropped; shells
 //!    thinner than the rounding are dropped.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
+
+use super::Map;
 
 use glam::DVec3;
 
@@ -353,9 +355,9 @@ fn grow(
 /// often each vertex is on the rim.
 #[derive(Default)]
 struct Rim {
-    succ: HashMap<usize, usize>,
-    pred: HashMap<usize, usize>,
-    on_rim: HashMap<u32, u32>,
+    succ: Map<usize, usize>,
+    pred: Map<usize, usize>,
+    on_rim: Map<u32, u32>,
 }
 
 impl Rim {
@@ -395,19 +397,19 @@ fn straight(pts: &Points, locus: &[Pid], ring: &[u32], v: u32) -> bool {
 /// Drops vertices where only two faces meet and the boundary runs straight through, numbers the shell's vertices and rounds
 /// their loci.
 fn finish(pts: &Points, locus: &[Pid], pos: &[DVec3], faces: Vec<(Vec<u32>, Source)>) -> Shell {
-    let mut faces_at: HashMap<u32, Vec<usize>> = HashMap::new();
+    let mut faces_at: Map<u32, Vec<usize>> = Map::default();
     for (fi, (ring, _)) in faces.iter().enumerate() {
         for &v in ring {
             faces_at.entry(v).or_default().push(fi);
         }
     }
-    let mut index: HashMap<u32, u32> = HashMap::new();
+    let mut index: Map<u32, u32> = Map::default();
     let mut positions = Vec::new();
     let mut out_faces = Vec::with_capacity(faces.len());
     let mut sources = Vec::with_capacity(faces.len());
     // A vertex is dropped only if both its faces keep three vertices or more.
     let mut keep_count: Vec<usize> = faces.iter().map(|(r, _)| r.len()).collect();
-    let mut dropped: HashMap<u32, bool> = HashMap::new();
+    let mut dropped: Map<u32, bool> = Map::default();
     let mut candidates: Vec<(u32, usize, usize)> = faces_at
         .iter()
         .filter(|(_, f)| f.len() == 2 && f[0] != f[1])
@@ -497,7 +499,7 @@ fn collapse(
             }
         }
     }
-    let mut index: HashMap<u32, u32> = HashMap::new();
+    let mut index: Map<u32, u32> = Map::default();
     let mut out_pos = Vec::new();
     let mut out_faces = Vec::new();
     let mut out_sources = Vec::new();

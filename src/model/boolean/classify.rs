@@ -8,7 +8,7 @@
 //! whose direction is perturbed symbolically, so that it never grazes an edge or a
 //! vertex.
 
-use std::collections::{HashMap, HashSet};
+use super::{Map, Set};
 
 use super::BooleanError;
 use super::intersect::{EdgeKey, Traces, edge_key};
@@ -38,14 +38,14 @@ pub(crate) struct Pieces {
     /// The operand's triangle each piece is part of.
     pub source: Vec<u32>,
     /// The edges among pieces that lie on the other surface.
-    pub traced: HashSet<EdgeKey>,
+    pub traced: Set<EdgeKey>,
 }
 
 /// Cuts every triangle of `mesh` that the traces touch.
 pub(crate) fn pieces(
     pts: &Points,
     mesh: &Mesh,
-    segs: &HashMap<u32, Vec<[Pid; 2]>>,
+    segs: &Map<u32, Vec<[Pid; 2]>>,
     traces: &Traces,
 ) -> Result<Pieces, BooleanError> {
     let mut out = Pieces::default();
@@ -92,7 +92,8 @@ pub(crate) fn classify(
 ) -> Result<Vec<Class>, BooleanError> {
     let n = pieces.tris.len();
     let mut sets = Sets::new(n);
-    let mut by_edge: HashMap<(Pid, Pid), u32> = HashMap::with_capacity(3 * n);
+    let mut by_edge: Map<(Pid, Pid), u32> =
+        Map::with_capacity_and_hasher(3 * n, Default::default());
     for (i, t) in pieces.tris.iter().enumerate() {
         for k in 0..3 {
             by_edge.insert((t[k], t[(k + 1) % 3]), i as u32);
@@ -109,7 +110,7 @@ pub(crate) fn classify(
             }
         }
     }
-    let mut class_of_root: HashMap<u32, Class> = HashMap::new();
+    let mut class_of_root: Map<u32, Class> = Map::default();
     let mut classes = Vec::with_capacity(n);
     for i in 0..n {
         let r = sets.find(i as u32);

@@ -1,16 +1,19 @@
-//! Exact signs of polynomials in f64 inputs: a filter in f64 with a running error
-//! bound, and exact dyadic arithmetic behind it.
+//! Exact signs of polynomials in f64 inputs: two filters with running error bounds, and
+//! exact dyadic arithmetic behind them.
 //!
 //! Every predicate of the boolean is a polynomial in input coordinates (all f64, so all
 //! dyadic rationals). It is written once, generic over [`Ring`], and evaluated first in
 //! [`Fx`] (f64 with a bound on the absolute error of the value), which answers when the
-//! value is farther from zero than its bound; otherwise in [`Dy`] (an arbitrary-precision
-//! integer times a power of two), which is exact. The answer is therefore always the
-//! sign of the exact value.
+//! value is farther from zero than its bound; otherwise in double-double with a bound
+//! ([`super::double::Dd`]), which answers the same way with about twice the precision;
+//! otherwise in [`Dy`] (an arbitrary-precision integer times a power of two), which is
+//! exact. The answer is therefore always the sign of the exact value.
 
 use std::ops::{Add, Mul, Neg, Sub};
 
 use num_bigint::{BigInt, Sign};
+
+use super::double::Dd;
 use num_traits::{Signed, ToPrimitive, Zero};
 
 /// The numbers a predicate is evaluated in: a commutative ring holding every f64.
@@ -357,12 +360,15 @@ pub(crate) trait Poly {
     /// The polynomial's value in `R`.
     fn eval<R: Ring>(&self) -> R;
 
-    /// The sign of the exact value: the filter's answer when it is certain, else the
-    /// exact arithmetic's.
+    /// The sign of the exact value: the f64 filter's answer when it is certain, else
+    /// the double-double filter's ([`Dd`]) when it is, else the exact arithmetic's.
     fn sign(&self) -> i8 {
         match self.eval::<Fx>().sign() {
             Some(s) => s,
-            None => self.eval::<Dy>().sign(),
+            None => match self.eval::<Dd>().sign() {
+                Some(s) => s,
+                None => self.eval::<Dy>().sign(),
+            },
         }
     }
 }

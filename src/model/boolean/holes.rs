@@ -16,7 +16,9 @@
 //! whose boundary pinches at a vertex, or one where no hole can be joined to the outer
 //! ring by two clear chords, keeps the cut the merge made.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
+
+use super::{Map, Set};
 
 use super::Source;
 use super::point::{Pid, Points};
@@ -49,14 +51,14 @@ pub(crate) fn recut(
         return faces;
     }
     // Every edge of the shell: a chord may not join two vertices an edge joins already.
-    let mut edges: std::collections::HashSet<(u32, u32)> = std::collections::HashSet::new();
+    let mut edges: Set<(u32, u32)> = Set::default();
     for (r, _) in &faces {
         for k in 0..r.len() {
             let (u, v) = (r[k], r[(k + 1) % r.len()]);
             edges.insert((u.min(v), u.max(v)));
         }
     }
-    let mut replaced: HashMap<usize, Option<Vec<Vec<u32>>>> = HashMap::new();
+    let mut replaced: Map<usize, Option<Vec<Vec<u32>>>> = Map::default();
     for group in groups {
         let rings: Vec<&Vec<u32>> = group.iter().map(|&i| &faces[i].0).collect();
         if let Some(new) = cut_through_corners(pts, locus, &rings, &edges) {
@@ -89,7 +91,7 @@ fn key(s: Source) -> SourceKey {
 /// The members that share edges, in groups (each sorted).
 fn adjacent_groups(faces: &[(Vec<u32>, Source)], members: &[usize]) -> Vec<Vec<usize>> {
     // Member k of `members` is set k.
-    let mut owner: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut owner: Map<(u32, u32), u32> = Map::default();
     for (k, &i) in members.iter().enumerate() {
         let r = &faces[i].0;
         for e in 0..r.len() {
@@ -122,7 +124,7 @@ fn loops(rings: &[&Vec<u32>]) -> Option<Vec<Vec<u32>>> {
             edges.push((r[k], r[(k + 1) % r.len()]));
         }
     }
-    let all: std::collections::HashSet<(u32, u32)> = edges.iter().copied().collect();
+    let all: Set<(u32, u32)> = edges.iter().copied().collect();
     let mut from: BTreeMap<u32, u32> = BTreeMap::new();
     for &(u, v) in &edges {
         if !all.contains(&(v, u)) && from.insert(u, v).is_some() {
@@ -149,7 +151,7 @@ fn cut_through_corners(
     pts: &Points,
     locus: &[Pid],
     rings: &[&Vec<u32>],
-    edges: &std::collections::HashSet<(u32, u32)>,
+    edges: &Set<(u32, u32)>,
 ) -> Option<Vec<Vec<u32>>> {
     let loops = loops(rings)?;
     if loops.is_empty() {
@@ -222,7 +224,7 @@ struct Plane<'a> {
     axis: u8,
     sense: i8,
     /// The shell's edges, as (smaller, larger) vertex pairs.
-    edges: &'a std::collections::HashSet<(u32, u32)>,
+    edges: &'a Set<(u32, u32)>,
 }
 
 impl Plane<'_> {
@@ -296,9 +298,8 @@ impl Plane<'_> {
     /// by a ray along the second projected axis, exactly.
     fn inside(&self, ring: &[u32], x: u32) -> bool {
         let j = (self.axis as usize + 2) % 3;
-        let def = |v: u32| self.pts.defs[self.at(v) as usize];
         // The sign of v_j − x_j.
-        let above = |v: u32| super::split::coord_cmp(self.pts, j, def(x), def(v)) > 0;
+        let above = |v: u32| super::split::coord_cmp_at(self.pts, j, self.at(x), self.at(v)) > 0;
         let mut winding = 0i32;
         for k in 0..ring.len() {
             let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);

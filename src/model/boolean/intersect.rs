@@ -8,7 +8,7 @@
 //! the same key, so the point is made once and the traces join without tolerances.
 //! Coplanar triangles (shared faces, A op A) meet in a polygon, whose boundary is traced.
 
-use std::collections::HashMap;
+use super::Map;
 
 use super::exact::{Poly, Ring};
 use super::mesh::Mesh;
@@ -44,13 +44,13 @@ enum Key {
 /// Everything the two surfaces share, traced on each triangle.
 #[derive(Debug, Default)]
 pub(crate) struct Traces {
-    keys: HashMap<Key, Pid>,
+    keys: Map<Key, Pid>,
     /// Points of both surfaces on each edge (of either mesh), not its ends.
-    pub on_edge: HashMap<EdgeKey, Vec<Pid>>,
+    pub on_edge: Map<EdgeKey, Vec<Pid>>,
     /// Segments on both surfaces, per triangle of A.
-    pub segs_a: HashMap<u32, Vec<[Pid; 2]>>,
+    pub segs_a: Map<u32, Vec<[Pid; 2]>>,
     /// Segments on both surfaces, per triangle of B.
-    pub segs_b: HashMap<u32, Vec<[Pid; 2]>>,
+    pub segs_b: Map<u32, Vec<[Pid; 2]>>,
 }
 
 /// An end of a triangle's meeting with the other's plane: its definition and the
@@ -111,8 +111,16 @@ impl Traces {
             return;
         };
         // Order both along the line where the planes meet, by a coordinate on which
-        // that line advances.
-        let k = (0..3)
+        // that line advances (the fastest first, by the loci).
+        let normal = |t: [Pid; 3]| {
+            let [a, b, c] = t.map(|p| pts.input_at(p));
+            (b - a).cross(c - a)
+        };
+        let along = normal(tra).cross(normal(trb)).abs();
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&i, &j| along[j].total_cmp(&along[i]));
+        let k = order
+            .into_iter()
             .find(|&k| {
                 LineDir {
                     pts,

@@ -10,12 +10,11 @@
 //! Loci equal in both operands become one point, so shared vertices, edges and faces
 //! are recognised by ids, not by tolerances.
 
-use std::collections::HashMap;
+use super::Map;
 
 use glam::DVec3;
 
-use super::exact::{Fx, Ring};
-use super::point::{Def, Pid, Points};
+use super::point::{Pid, Points};
 use super::sets::Sets;
 use super::{BooleanError, Operand, Which};
 use crate::model::ids::Serial;
@@ -38,7 +37,7 @@ pub(crate) struct Mesh {
 /// Reads both operands into one point table and two meshes.
 pub(crate) fn meshes(a: Operand<'_>, b: Operand<'_>) -> Result<(Points, Mesh, Mesh), BooleanError> {
     let mut pts = Points::default();
-    let mut index: HashMap<[u64; 3], Pid> = HashMap::new();
+    let mut index: Map<[u64; 3], Pid> = Map::default();
     let ma = mesh(&mut pts, &mut index, a, Which::A)?;
     let mb = mesh(&mut pts, &mut index, b, Which::B)?;
     Ok((pts, ma, mb))
@@ -55,7 +54,7 @@ fn key(p: DVec3) -> [u64; 3] {
 
 fn mesh(
     pts: &mut Points,
-    index: &mut HashMap<[u64; 3], Pid>,
+    index: &mut Map<[u64; 3], Pid>,
     op: Operand<'_>,
     which: Which,
 ) -> Result<Mesh, BooleanError> {
@@ -68,16 +67,7 @@ fn mesh(
             return Err(BooleanError::NonFinite { operand: which });
         }
         let p = p + DVec3::ZERO;
-        let id = *index.entry(key(p)).or_insert_with(|| {
-            let id = pts.defs.len() as Pid;
-            pts.defs.push(Def::Input(pts.input.len() as u32));
-            pts.input.push(p);
-            pts.approx.push(p);
-            pts.slack.push(0.0);
-            pts.filtered
-                .push([Fx::of(p.x), Fx::of(p.y), Fx::of(p.z), Fx::of(1.0)]);
-            id
-        });
+        let id = *index.entry(key(p)).or_insert_with(|| pts.add_input(p));
         pid[v.index()] = id;
     }
     let mut m = Mesh::default();
@@ -141,7 +131,7 @@ fn merge_flat_neighbours(
         return;
     }
     // The smallest serial of each group stands for it.
-    let mut name: HashMap<u32, Serial> = HashMap::new();
+    let mut name: Map<u32, Serial> = Map::default();
     for f in body.faces() {
         let r = sets.find(f.index() as u32);
         let s = body.face_serial(f);
@@ -153,7 +143,7 @@ fn merge_flat_neighbours(
             })
             .or_insert(s);
     }
-    let mut of_serial: HashMap<Serial, Serial> = HashMap::new();
+    let mut of_serial: Map<Serial, Serial> = Map::default();
     for f in body.faces() {
         of_serial.insert(body.face_serial(f), name[&sets.find(f.index() as u32)]);
     }

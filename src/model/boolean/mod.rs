@@ -9,8 +9,9 @@
 //! through two input points meeting the plane through three (an edge piercing a
 //! triangle), or two coplanar segments crossing. Predicates on such points are
 //! Attene's *indirect predicates*: evaluated through homogeneous coordinates, first in
-//! f64 with a running error bound, then, when the bound cannot decide the sign, in exact
-//! dyadic arithmetic ([`exact`]); predicates on input points alone are Shewchuk's
+//! f64 with a running error bound, then, when the bound cannot decide the sign, in
+//! double-double with a bound ([`double`]), and only then in exact dyadic arithmetic
+//! ([`exact`]); predicates on input points alone are Shewchuk's
 //! adaptive `orient2d`/`orient3d` (the `robust` crate). Because each boolean starts from
 //! f64 inputs and rounds only its output, constructions never nest, so the degree of
 //! every predicate is bounded. (EMBER's plane-based representation, which would keep
@@ -45,6 +46,12 @@
 //! Every output face records the input face it is a piece of ([`Source`]).
 
 use glam::{DAffine3, DVec3};
+
+/// The boolean's hash maps: foldhash's fixed-seed hasher, fast on the small integer keys
+/// used here, and the same in every run.
+pub(crate) type Map<K, V> = std::collections::HashMap<K, V, foldhash::fast::FixedState>;
+/// The boolean's hash sets (see [`Map`]).
+pub(crate) type Set<K> = std::collections::HashSet<K, foldhash::fast::FixedState>;
 
 use crate::model::body::Body;
 use crate::model::ids::{Serial, Serials};
@@ -334,27 +341,25 @@ pub enum BooleanError {
 /// shells bound exactly the set `op(interior(a), interior(b))`, rounded to f64 at the
 /// end; the same inputs give bit-identical output.
 pub fn boolean(a: Operand<'_>, b: Operand<'_>, op: Op) -> Result<Solution, BooleanError> {
+    let mut laps = Laps::start();
     let (mut pts, ma, mb) = mesh::meshes(a, b)?;
-    check_self(&mut pts, &ma, Which::A, a.body)?;
-    check_self(&mut pts, &mb, Which::B, b.body)?;
+    laps.mark("mesh");
+    check_self(&mut pts, &ma, Which::A)?;
+    check_self(&mut pts, &mb, Which::B)?;
+    laps.mark("check");
     let mut traces = intersect::Traces::default();
-    let tree = broad::Tree::new(&mb.boxes);
-    let mut hits = Vec::new();
-    for (ta, bx) in ma.boxes.iter().enumerate() {
-        if !overlaps(*bx, mb.bounds) {
-            continue;
-        }
-        tree.query(bx[0], bx[1], &mut hits);
-        for &tb in &hits {
-            if overlaps(*bx, mb.boxes[tb as usize]) {
-                traces.pair(&mut pts, &ma, ta as u32, &mb, tb);
-            }
-        }
+    let pairs = candidates(&pts, &ma, &mb);
+    let candidates = pairs.len();
+    for (ta, tb) in pairs {
+        traces.pair(&mut pts, &ma, ta, &mb, tb);
     }
+    laps.mark("traces");
     let pa = classify::pieces(&pts, &ma, &traces.segs_a, &traces)?;
     let pb = classify::pieces(&pts, &mb, &traces.segs_b, &traces)?;
+    laps.mark("pieces");
     let ca = classify::classify(&mut pts, &pa, &ma, &mb)?;
     let cb = classify::classify(&mut pts, &pb, &mb, &ma)?;
+    laps.mark("classify");
     let mut kept = Vec::new();
     for (i, c) in ca.iter().enumerate() {
         if keeps_a(op, *c) {
@@ -384,6 +389,16 @@ pub fn boolean(a: Operand<'_>, b: Operand<'_>, op: Op) -> Result<Solution, Boole
         }
     }
     let mut shells = assemble::assemble(&pts, &kept)?;
+    laps.mark("assemble");
+    tracing::debug!(
+        ?op,
+        triangles = ma.tris.len() + mb.tris.len(),
+        candidates,
+        points = pts.defs.len(),
+        shells = shells.len(),
+        phases = %laps,
+        "boolean"
+    );
     nest(&mut shells);
     let unbounded = match op {
         Op::Union => ma.everted || mb.everted,
@@ -391,6 +406,39 @@ pub fn boolean(a: Operand<'_>, b: Operand<'_>, op: Op) -> Result<Solution, Boole
         Op::Difference => ma.everted && !mb.everted,
     };
     Ok(Solution { shells, unbounded })
+}
+
+/// The time each phase of one boolean took, for the log.
+struct Laps {
+    start: std::time::Instant,
+    marks: Vec<(&'static str, std::time::Duration)>,
+}
+
+impl Laps {
+    fn start() -> Laps {
+        Laps {
+            start: std::time::Instant::now(),
+            marks: Vec::with_capacity(8),
+        }
+    }
+
+    /// Notes that phase `name` ended now.
+    fn mark(&mut self, name: &'static str) {
+        self.marks.push((name, self.start.elapsed()));
+    }
+}
+
+impl std::fmt::Display for Laps {
+    /// Each phase's own time in milliseconds: `mesh 1.2, check 3.4, …`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut before = std::time::Duration::ZERO;
+        for (k, (name, at)) in self.marks.iter().enumerate() {
+            let sep = if k == 0 { "" } else { ", " };
+            write!(f, "{sep}{name} {:.3}", (*at - before).as_secs_f64() * 1e3)?;
+            before = *at;
+        }
+        Ok(())
+    }
 }
 
 /// Whether a piece of A in class `c` bounds the result.
@@ -411,51 +459,76 @@ fn keeps_b(op: Op, c: Class) -> bool {
     }
 }
 
-fn overlaps(a: [DVec3; 2], b: [DVec3; 2]) -> bool {
-    a[0].cmple(b[1]).all() && b[0].cmple(a[1]).all()
+/// The triangle pairs of `a` and `b` that may meet: their boxes meet and neither
+/// triangle lies strictly on one side of the other's plane. In ascending order.
+fn candidates(pts: &Points, a: &mesh::Mesh, b: &mesh::Mesh) -> Vec<(u32, u32)> {
+    let (ca, cb) = (corners(pts, a), corners(pts, b));
+    let (pa, pb) = (planes(&ca), planes(&cb));
+    let mut pairs = Vec::new();
+    broad::Tree::new(&a.boxes).pairs(
+        &a.boxes,
+        &broad::Tree::new(&b.boxes),
+        &b.boxes,
+        |i, j| {
+            let (i, j) = (i as usize, j as usize);
+            !pb[j].apart(&ca[i]) && !pa[i].apart(&cb[j])
+        },
+        &mut pairs,
+    );
+    pairs.sort_unstable();
+    pairs
+}
+
+/// Each triangle's corners.
+fn corners(pts: &Points, m: &mesh::Mesh) -> Vec<[DVec3; 3]> {
+    m.tris.iter().map(|t| t.map(|p| pts.input_at(p))).collect()
+}
+
+/// Each triangle's plane, for culling.
+fn planes(corners: &[[DVec3; 3]]) -> Vec<broad::Plane> {
+    corners
+        .iter()
+        .map(|&[a, b, c]| broad::Plane::new(a, b, c))
+        .collect()
 }
 
 /// Refuses an operand whose triangles cross each other (other than along the edges and
 /// at the vertices they share).
-fn check_self(
-    pts: &mut Points,
-    m: &mesh::Mesh,
-    which: Which,
-    _body: &Body,
-) -> Result<(), BooleanError> {
-    let tree = broad::Tree::new(&m.boxes);
-    let mut hits = Vec::new();
-    for (i, bx) in m.boxes.iter().enumerate() {
-        tree.query(bx[0], bx[1], &mut hits);
-        let t = m.tris[i];
-        for &j in &hits {
-            let j = j as usize;
-            if j <= i || !overlaps(*bx, m.boxes[j]) {
-                continue;
-            }
-            let u = m.tris[j];
-            let shared = t.iter().filter(|p| u.contains(p)).count();
-            if shared > 0 {
-                continue;
-            }
-            let mut probe = intersect::Traces::default();
-            let before = pts.defs.len();
-            probe.pair(pts, m, i as u32, m, j as u32);
-            // Triangles of a valid body that share no corner may still touch at one
-            // point: where a face's triangle has a side through a vertex of the face
-            // (collinear vertices). Only a contact of positive length is a crossing.
-            let crossing = probe
-                .segs_a
-                .values()
-                .flatten()
-                .any(|&[p, q]| distinct(pts, p, q));
-            pts.truncate(before);
-            if crossing {
-                return Err(BooleanError::SelfIntersecting {
-                    operand: which,
-                    faces: [m.face[i], m.face[j]],
-                });
-            }
+fn check_self(pts: &mut Points, m: &mesh::Mesh, which: Which) -> Result<(), BooleanError> {
+    let corners = corners(pts, m);
+    let planes = planes(&corners);
+    let mut pairs = Vec::new();
+    broad::Tree::new(&m.boxes).self_pairs(
+        &m.boxes,
+        |i, j| {
+            let (i, j) = (i as usize, j as usize);
+            let (t, u) = (m.tris[i], m.tris[j]);
+            !t.iter().any(|p| u.contains(p))
+                && !planes[i].apart(&corners[j])
+                && !planes[j].apart(&corners[i])
+        },
+        &mut pairs,
+    );
+    pairs.sort_unstable();
+    for (i, j) in pairs {
+        let (i, j) = (i as usize, j as usize);
+        let mut probe = intersect::Traces::default();
+        let before = pts.defs.len();
+        probe.pair(pts, m, i as u32, m, j as u32);
+        // Triangles of a valid body that share no corner may still touch at one
+        // point: where a face's triangle has a side through a vertex of the face
+        // (collinear vertices). Only a contact of positive length is a crossing.
+        let crossing = probe
+            .segs_a
+            .values()
+            .flatten()
+            .any(|&[p, q]| distinct(pts, p, q));
+        pts.truncate(before);
+        if crossing {
+            return Err(BooleanError::SelfIntersecting {
+                operand: which,
+                faces: [m.face[i], m.face[j]],
+            });
         }
     }
     Ok(())
@@ -463,13 +536,13 @@ fn check_self(
 
 /// Whether points `p` and `q` differ in some coordinate (exactly).
 fn distinct(pts: &Points, p: Pid, q: Pid) -> bool {
-    p != q
-        && (0..3).any(|k| split::coord_cmp(pts, k, pts.defs[p as usize], pts.defs[q as usize]) != 0)
+    p != q && (0..3).any(|k| split::coord_cmp_at(pts, k, p, q) != 0)
 }
 
 mod assemble;
 mod broad;
 mod classify;
+mod double;
 pub(crate) mod exact;
 mod holes;
 mod intersect;

@@ -43,17 +43,35 @@ pub(crate) struct Points {
     pub slack: Vec<f64>,
     /// Each point's homogeneous coordinates in the filter, computed once.
     pub filtered: Vec<[Fx; 4]>,
+    /// The sign of each point's W, decided once.
+    w: Vec<i8>,
 }
 
 impl Points {
+    /// Adds an input locus, returning its id. Precondition: finite, and no input point
+    /// added so far has the same locus.
+    pub fn add_input(&mut self, p: DVec3) -> Pid {
+        let id = self.defs.len() as Pid;
+        self.defs.push(Def::Input(self.input.len() as u32));
+        self.input.push(p);
+        self.approx.push(p);
+        self.slack.push(0.0);
+        self.filtered
+            .push([Fx::of(p.x), Fx::of(p.y), Fx::of(p.z), Fx::of(1.0)]);
+        self.w.push(1);
+        id
+    }
+
     /// Adds a constructed point, returning its id.
     pub fn add(&mut self, def: Def) -> Pid {
         let id = self.defs.len() as Pid;
         let h = self.homog::<Fx>(def);
         let w = h[3].v;
         let x = DVec3::new(h[0].v / w, h[1].v / w, h[2].v / w);
+        let w_sign = h[3].sign().unwrap_or_else(|| self.w_sign_def(def));
         self.filtered.push(h);
         self.defs.push(def);
+        self.w.push(w_sign);
         // x = X / W with |ΔX| ≤ e_X, |ΔW| ≤ e_W: |Δx| ≤ (e_X + |x| e_W) / (|W| − e_W).
         if w.abs() > 2.0 * h[3].e && x.is_finite() {
             let ex = h[0].e.max(h[1].e).max(h[2].e);
@@ -75,6 +93,7 @@ impl Points {
     /// Forgets every point from `len` on (constructions made only to test).
     pub fn truncate(&mut self, len: usize) {
         self.filtered.truncate(len);
+        self.w.truncate(len);
         self.defs.truncate(len);
         self.approx.truncate(len);
         self.slack.truncate(len);
@@ -197,20 +216,46 @@ impl Points {
         }
     }
 
+    /// Coordinate `k` of the point `def` defines, when its definition alone gives it
+    /// exactly: an input point's; a point on a line or in a plane whose defining input
+    /// points share that coordinate; a mixture of points that share it.
+    pub fn known(&self, def: Def, k: usize) -> Option<f64> {
+        let shared = |ps: &[Pid]| {
+            let c = self.at(ps[0])[k];
+            ps[1..].iter().all(|&q| self.at(q)[k] == c).then_some(c)
+        };
+        match def {
+            Def::Input(i) => Some(self.input[i as usize][k]),
+            Def::Lpi { line, plane } => shared(&plane).or_else(|| shared(&line)),
+            Def::Ssi { a, b, .. } => shared(&a).or_else(|| shared(&b)),
+            Def::Mix { p, .. } => {
+                let c = self.known(self.defs[p[0] as usize], k)?;
+                p[1..]
+                    .iter()
+                    .all(|&q| self.known(self.defs[q as usize], k) == Some(c))
+                    .then_some(c)
+            }
+        }
+    }
+
     /// Whether `p` is an input point.
     #[inline]
     pub fn is_input(&self, p: Pid) -> bool {
         matches!(self.defs[p as usize], Def::Input(_))
     }
 
-    /// Sign of W of point `p`.
-    fn w_sign(&self, p: Pid) -> i8 {
-        self.w_sign_def(self.defs[p as usize])
+    /// Sign of W of point `p` (1 for an input point).
+    #[inline]
+    pub fn w_sign(&self, p: Pid) -> i8 {
+        self.w[p as usize]
     }
 
     /// Which side of the plane through input points `tri` (counter-clockwise seen from
     /// the front) the point `p` lies: 1 in front, −1 behind, 0 on it.
     pub fn side(&self, tri: [Pid; 3], p: Pid) -> i8 {
+        if tri.contains(&p) {
+            return 0;
+        }
         if self.is_input(p) {
             // Shewchuk's orient3d is positive when the fourth point is behind.
             let o = robust::orient3d(
@@ -232,6 +277,9 @@ impl Points {
             return self.side(tri, p);
         }
         let four = [tri[0], tri[1], tri[2], p];
+        if (0..4).any(|i| four[i + 1..].contains(&four[i])) {
+            return 0;
+        }
         let w: i8 = four.iter().map(|&q| self.w_sign(q)).product();
         -(Orient4 { pts: self, p: four }.sign() * w)
     }
@@ -240,6 +288,9 @@ impl Points {
     /// 1 counter-clockwise, −1 clockwise, 0 collinear (axes in cyclic order, so the
     /// projection along +axis keeps the sense of rotation seen from +axis).
     pub fn orient2d(&self, axis: u8, p: [Pid; 3]) -> i8 {
+        if p[0] == p[1] || p[1] == p[2] || p[2] == p[0] {
+            return 0;
+        }
         if p.iter().all(|&q| self.is_input(q)) {
             let (i, j) = others(axis);
             let c = |q: Pid| {
@@ -472,16 +523,11 @@ mod tests {
     use super::*;
 
     fn points(loci: &[DVec3]) -> Points {
-        Points {
-            input: loci.to_vec(),
-            defs: (0..loci.len() as u32).map(Def::Input).collect(),
-            approx: loci.to_vec(),
-            slack: vec![0.0; loci.len()],
-            filtered: loci
-                .iter()
-                .map(|p| [Fx::of(p.x), Fx::of(p.y), Fx::of(p.z), Fx::of(1.0)])
-                .collect(),
+        let mut p = Points::default();
+        for &x in loci {
+            p.add_input(x);
         }
+        p
     }
 
     /// The orientation of four points, some constructed, agrees with Shewchuk's on

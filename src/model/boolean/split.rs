@@ -7,9 +7,9 @@
 //! method), after cutting it at any point that lies on it. Traces do not cross each
 //! other (the surfaces do not cross themselves); if they do, the cut is refused.
 
-use std::collections::HashMap;
+use super::Map;
 
-use super::exact::{Poly, Ring};
+use super::exact::{Fx, Poly, Ring};
 use super::intersect::{EdgeKey, edge_key};
 use super::point::{Def, Pid, Points};
 
@@ -41,7 +41,7 @@ struct Tri2 {
     pts: Vec<[Pid; 3]>,
     alive: Vec<bool>,
     /// Directed edge → the triangle holding it.
-    edge: HashMap<(Pid, Pid), usize>,
+    edge: Map<(Pid, Pid), usize>,
 }
 
 impl Tri2 {
@@ -81,7 +81,8 @@ pub(crate) fn cut(
     if sense == 0 {
         return Err(CutError);
     }
-    let mut on_edges: HashMap<Pid, u8> = HashMap::with_capacity(extra.len() + 3);
+    let mut on_edges: Map<Pid, u8> =
+        Map::with_capacity_and_hasher(extra.len() + 3, Default::default());
     for (k, &corner) in tri.iter().enumerate() {
         on_edges.insert(corner, (1 << k) | (1 << ((k + 2) % 3)));
     }
@@ -99,7 +100,7 @@ pub(crate) fn cut(
     let mut t = Tri2 {
         pts: Vec::new(),
         alive: Vec::new(),
-        edge: HashMap::new(),
+        edge: Map::default(),
     };
     t.add(tri);
     let mut verts: Vec<Pid> = tri.to_vec();
@@ -188,15 +189,10 @@ fn insert_point(
 
 /// Whether `w`, on the line through `p` and `q`, lies strictly between them.
 fn strictly_between(pts: &Points, p: Pid, q: Pid, w: Pid) -> bool {
-    let (dp, dq, dw) = (
-        pts.defs[p as usize],
-        pts.defs[q as usize],
-        pts.defs[w as usize],
-    );
     for k in 0..3 {
-        let s = coord_cmp(pts, k, dp, dq);
+        let s = coord_cmp_at(pts, k, p, q);
         if s != 0 {
-            return coord_cmp(pts, k, dp, dw) == s && coord_cmp(pts, k, dw, dq) == s;
+            return coord_cmp_at(pts, k, p, w) == s && coord_cmp_at(pts, k, w, q) == s;
         }
     }
     false
@@ -235,7 +231,12 @@ fn insert_segment(
     // diagonal is flipped, and the new diagonal goes back in the queue while it still
     // crosses; a non-convex one waits at the back.
     let crosses = |u: Pid, v: Pid| {
-        orient(p, q, u) * orient(p, q, v) < 0 && orient(u, v, p) * orient(u, v, q) < 0
+        u != p
+            && u != q
+            && v != p
+            && v != q
+            && orient(p, q, u) * orient(p, q, v) < 0
+            && orient(u, v, p) * orient(u, v, q) < 0
     };
     let mut queue: std::collections::VecDeque<(Pid, Pid)> = {
         let mut e: Vec<(Pid, Pid)> = t
@@ -290,13 +291,48 @@ fn third(t: [Pid; 3], u: Pid, v: Pid) -> Pid {
     t.into_iter().find(|&x| x != u && x != v).unwrap_or(u)
 }
 
-/// The sign of `q_k − p_k`.
+/// The sign of `q_k − p_k` for two definitions (points made or about to be made).
 pub(crate) fn coord_cmp(pts: &Points, k: usize, p: Def, q: Def) -> i8 {
     if p == q {
         return 0;
     }
-    let w = pts.w_sign_def(p) * pts.w_sign_def(q);
-    CoordDiff { pts, k, p, q }.sign() * w
+    if let (Some(a), Some(b)) = (pts.known(p, k), pts.known(q, k)) {
+        return b.partial_cmp(&a).map_or(0, |o| o as i8);
+    }
+    let (hp, hq) = (pts.homog::<Fx>(p), pts.homog::<Fx>(q));
+    let w = |h: &[Fx; 4], d: Def| h[3].sign().unwrap_or_else(|| pts.w_sign_def(d));
+    let sign = w(&hp, p) * w(&hq, q);
+    let diff = hq[k] * hp[3] - hp[k] * hq[3];
+    diff.sign()
+        .unwrap_or_else(|| CoordDiff { pts, k, p, q }.sign())
+        * sign
+}
+
+/// The sign of `q_k − p_k` for two points of the table: their approximations' bounds
+/// first, then the filter kept from when they were made, then exact arithmetic.
+pub(crate) fn coord_cmp_at(pts: &Points, k: usize, p: Pid, q: Pid) -> i8 {
+    if p == q {
+        return 0;
+    }
+    let (ap, aq) = (pts.approx[p as usize][k], pts.approx[q as usize][k]);
+    let gap = pts.slack[p as usize] + pts.slack[q as usize];
+    if aq - ap > gap {
+        return 1;
+    }
+    if ap - aq > gap {
+        return -1;
+    }
+    let (dp, dq) = (pts.defs[p as usize], pts.defs[q as usize]);
+    if let (Some(a), Some(b)) = (pts.known(dp, k), pts.known(dq, k)) {
+        return b.partial_cmp(&a).map_or(0, |o| o as i8);
+    }
+    let (hp, hq) = (pts.homog_of::<Fx>(p), pts.homog_of::<Fx>(q));
+    let sign = pts.w_sign(p) * pts.w_sign(q);
+    let diff = hq[k] * hp[3] - hp[k] * hq[3];
+    let (p, q) = (dp, dq);
+    diff.sign()
+        .unwrap_or_else(|| CoordDiff { pts, k, p, q }.sign())
+        * sign
 }
 
 /// `q_k W_p − p_k W_q`.
