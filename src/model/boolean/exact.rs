@@ -360,13 +360,21 @@ pub(crate) trait Poly {
     /// The polynomial's value in `R`.
     fn eval<R: Ring>(&self) -> R;
 
+    /// Whether the value is known to be zero without evaluating it (a proof from the
+    /// points' definitions; `false` means "not known").
+    fn known_zero(&self) -> bool {
+        false
+    }
+
     /// The sign of the exact value: the f64 filter's answer when it is certain, else
-    /// the double-double filter's ([`Dd`]) when it is, else the exact arithmetic's.
+    /// the double-double filter's ([`Dd`]) when it is, else 0 if it is known to be,
+    /// else the exact arithmetic's.
     fn sign(&self) -> i8 {
         match self.eval::<Fx>().sign() {
             Some(s) => s,
             None => match self.eval::<Dd>().sign() {
                 Some(s) => s,
+                None if self.known_zero() => 0,
                 None => self.eval::<Dy>().sign(),
             },
         }

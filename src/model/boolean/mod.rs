@@ -545,6 +545,7 @@ mod classify;
 mod double;
 pub(crate) mod exact;
 mod holes;
+mod incidence;
 mod intersect;
 mod mesh;
 mod point;

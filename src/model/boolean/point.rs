@@ -216,28 +216,6 @@ impl Points {
         }
     }
 
-    /// Coordinate `k` of the point `def` defines, when its definition alone gives it
-    /// exactly: an input point's; a point on a line or in a plane whose defining input
-    /// points share that coordinate; a mixture of points that share it.
-    pub fn known(&self, def: Def, k: usize) -> Option<f64> {
-        let shared = |ps: &[Pid]| {
-            let c = self.at(ps[0])[k];
-            ps[1..].iter().all(|&q| self.at(q)[k] == c).then_some(c)
-        };
-        match def {
-            Def::Input(i) => Some(self.input[i as usize][k]),
-            Def::Lpi { line, plane } => shared(&plane).or_else(|| shared(&line)),
-            Def::Ssi { a, b, .. } => shared(&a).or_else(|| shared(&b)),
-            Def::Mix { p, .. } => {
-                let c = self.known(self.defs[p[0] as usize], k)?;
-                p[1..]
-                    .iter()
-                    .all(|&q| self.known(self.defs[q as usize], k) == Some(c))
-                    .then_some(c)
-            }
-        }
-    }
-
     /// Whether `p` is an input point.
     #[inline]
     pub fn is_input(&self, p: Pid) -> bool {
@@ -415,6 +393,10 @@ struct Side<'a> {
 }
 
 impl Poly for Side<'_> {
+    fn known_zero(&self) -> bool {
+        self.pts.known_on_plane(self.p, self.tri)
+    }
+
     fn eval<R: Ring>(&self) -> R {
         let [a, b, c] = self.tri.map(|q| vec3::<R>(self.pts.at(q)));
         let n = cross(&sub(&b, &a), &sub(&c, &a));
@@ -436,6 +418,10 @@ struct Orient2<'a> {
 }
 
 impl Poly for Orient2<'_> {
+    fn known_zero(&self) -> bool {
+        self.pts.known_collinear(self.p)
+    }
+
     fn eval<R: Ring>(&self) -> R {
         let (i, j) = others(self.axis);
         let h = self.p.map(|q| self.pts.homog_of::<R>(q));
@@ -455,6 +441,10 @@ struct Orient4<'a> {
 }
 
 impl Poly for Orient4<'_> {
+    fn known_zero(&self) -> bool {
+        self.pts.known_coplanar(self.p)
+    }
+
     fn eval<R: Ring>(&self) -> R {
         let h = self.p.map(|q| self.pts.homog_of::<R>(q));
         // Laplace expansion by the 2×2 minors of the first two rows and of the last two.

@@ -296,16 +296,12 @@ pub(crate) fn coord_cmp(pts: &Points, k: usize, p: Def, q: Def) -> i8 {
     if p == q {
         return 0;
     }
-    if let (Some(a), Some(b)) = (pts.known(p, k), pts.known(q, k)) {
-        return b.partial_cmp(&a).map_or(0, |o| o as i8);
+    if let Some(s) = known_cmp(pts, k, p, q) {
+        return s;
     }
     let (hp, hq) = (pts.homog::<Fx>(p), pts.homog::<Fx>(q));
     let w = |h: &[Fx; 4], d: Def| h[3].sign().unwrap_or_else(|| pts.w_sign_def(d));
-    let sign = w(&hp, p) * w(&hq, q);
-    let diff = hq[k] * hp[3] - hp[k] * hq[3];
-    diff.sign()
-        .unwrap_or_else(|| CoordDiff { pts, k, p, q }.sign())
-        * sign
+    homog_cmp(pts, k, (p, &hp), (q, &hq), w(&hp, p) * w(&hq, q))
 }
 
 /// The sign of `q_k − p_k` for two points of the table: their approximations' bounds
@@ -323,16 +319,32 @@ pub(crate) fn coord_cmp_at(pts: &Points, k: usize, p: Pid, q: Pid) -> i8 {
         return -1;
     }
     let (dp, dq) = (pts.defs[p as usize], pts.defs[q as usize]);
-    if let (Some(a), Some(b)) = (pts.known(dp, k), pts.known(dq, k)) {
-        return b.partial_cmp(&a).map_or(0, |o| o as i8);
+    if let Some(s) = known_cmp(pts, k, dp, dq) {
+        return s;
     }
     let (hp, hq) = (pts.homog_of::<Fx>(p), pts.homog_of::<Fx>(q));
-    let sign = pts.w_sign(p) * pts.w_sign(q);
+    homog_cmp(pts, k, (dp, &hp), (dq, &hq), pts.w_sign(p) * pts.w_sign(q))
+}
+
+/// The comparison of two coordinates that both definitions fix.
+fn known_cmp(pts: &Points, k: usize, p: Def, q: Def) -> Option<i8> {
+    let (a, b) = (pts.known(p, k)?, pts.known(q, k)?);
+    Some(b.partial_cmp(&a).map_or(0, |o| o as i8))
+}
+
+/// The comparison through homogeneous coordinates (`hp`, `hq` in the filter; `w` the
+/// sign of `W_p W_q`), exactly when the filter cannot decide.
+fn homog_cmp(
+    pts: &Points,
+    k: usize,
+    (p, hp): (Def, &[Fx; 4]),
+    (q, hq): (Def, &[Fx; 4]),
+    w: i8,
+) -> i8 {
     let diff = hq[k] * hp[3] - hp[k] * hq[3];
-    let (p, q) = (dp, dq);
     diff.sign()
         .unwrap_or_else(|| CoordDiff { pts, k, p, q }.sign())
-        * sign
+        * w
 }
 
 /// `q_k W_p − p_k W_q`.
