@@ -1,12 +1,16 @@
 //! Small writes and reads while a large body is created: the latency of a `PATCH` of a
 //! small body's pose and of a `GET` of that body, sent back to back by two clients
 //! while a third creates a UV sphere of `segments × rings` faces, against a running
-//! `winged serve` on loopback. See BENCHMARKS.md ("Server").
+//! `winged serve` on loopback. See BENCHMARKS.md ("Server"). With `--boolean`, the third
+//! takes instead the difference of two such spheres made beforehand (the second moved
+//! by half a radius on each axis), which the server solves beside the world's owner.
 //!
 //! ```text
 //! cargo run --release --example create_latency -- http://127.0.0.1:7878
 //! cargo run --release --example create_latency -- http://127.0.0.1:7878 --segments 1000 \
 //!     --rings 1000 --runs 3
+//! cargo run --release --example create_latency -- http://127.0.0.1:7878 --boolean \
+//!     --segments 256 --rings 256
 //! ```
 //!
 //! Each run: a small box is made; the writer and the reader start; 200 ms later the
@@ -29,6 +33,7 @@ struct Args {
     segments: u32,
     rings: u32,
     runs: usize,
+    boolean: bool,
 }
 
 fn args() -> Result<Args, String> {
@@ -37,6 +42,7 @@ fn args() -> Result<Args, String> {
         segments: 1000,
         rings: 1000,
         runs: 3,
+        boolean: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -57,6 +63,7 @@ fn args() -> Result<Args, String> {
                     .parse()
                     .map_err(|e| format!("--runs: {e}"))?
             }
+            "--boolean" => a.boolean = true,
             url if url.starts_with("http://") => a.url = url.trim_end_matches('/').to_string(),
             other => return Err(format!("unknown argument {other:?}")),
         }
@@ -158,22 +165,42 @@ fn run(a: &Args) {
             })
         })
     };
+    let sphere = |at: f64| {
+        let mut made = agent
+            .post(&format!("{}/v1/bodies", a.url))
+            .send_json(json!({
+                "shape": {"type": "sphere", "radius": 1.0, "segments": a.segments, "rings": a.rings},
+                "pose": {"position": [at, at, at]}
+            }))
+            .expect("POST a sphere");
+        made.body_mut().read_json::<Value>().expect("answer")
+    };
+    let operands = a.boolean.then(|| (sphere(0.0), sphere(0.5)));
     thread::sleep(Duration::from_millis(200));
     let from = Instant::now();
-    let mut made = agent
-        .post(&format!("{}/v1/bodies", a.url))
-        .send_json(json!({
-            "shape": {"type": "sphere", "radius": 1.0, "segments": a.segments, "rings": a.rings}
-        }))
-        .expect("POST the sphere");
-    let made: Value = made.body_mut().read_json().expect("answer");
+    let made = match &operands {
+        None => sphere(0.0),
+        Some((s1, s2)) => {
+            let mut cut = agent
+                .post(&format!("{}/v1/bodies/{}/boolean", a.url, s1["id"]))
+                .send_json(json!({"op": "difference", "with": s2["id"]}))
+                .expect("POST the boolean");
+            let cut: Value = cut.body_mut().read_json().expect("answer");
+            json!({"id": cut["id"], "faces": cut["pieces"][0]["faces"]})
+        }
+    };
     let to = Instant::now();
     thread::sleep(Duration::from_millis(200));
     stop.store(true, Ordering::Relaxed);
     let writes = writer.join().expect("writer");
     let reads = reader.join().expect("reader");
     println!(
-        "sphere {}x{}: F={} in {:.3} s",
+        "{} {}x{}: F={} in {:.3} s",
+        if a.boolean {
+            "sphere − sphere"
+        } else {
+            "sphere"
+        },
         a.segments,
         a.rings,
         made["faces"],

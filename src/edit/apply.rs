@@ -560,7 +560,7 @@ pub(super) fn apply_prepared(
             with,
             op,
             keep_with,
-        } => super::boolean::run(world, *body, *with, *op, *keep_with).map(|(_, o)| o),
+        } => super::boolean::run(world, (*body, *with, *op, *keep_with), None).map(|(_, o)| o),
         Edit::BooleanResult {
             body,
             with,

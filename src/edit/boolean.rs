@@ -8,23 +8,44 @@
 use super::apply::{Edit, EditError, Outcome, PieceOutcome, body_id};
 use super::command::{BooleanPiece, FaceList};
 use crate::model::boolean::Op;
-use crate::model::{BooleanOutcome, ShellRef, World};
+use crate::model::boolean::Solution;
+use crate::model::{BooleanBasis, BooleanOutcome, ShellRef, World, WorldError};
+
+/// A boolean's solution computed ahead, on a snapshot of the world, with what it was
+/// computed from.
+#[derive(Debug)]
+pub(super) struct Solved {
+    basis: BooleanBasis,
+    solution: Result<Solution, WorldError>,
+}
+
+/// Computes the boolean `op` of bodies `body` and `with` on `snapshot`, to be placed by
+/// [`run`] if the world is still on the same basis then. `None` when the operands are
+/// refused before the kernel runs (the owner refuses them again, at no cost).
+pub(super) fn solve_ahead(snapshot: &World, body: u64, with: u64, op: Op) -> Option<Solved> {
+    let (b1, b2) = (body_id(snapshot, body).ok()?, body_id(snapshot, with).ok()?);
+    let basis = snapshot.boolean_basis(b1, b2).ok()?;
+    let solution = basis.solve(op);
+    Some(Solved { basis, solution })
+}
 
 /// Runs the boolean `op` of bodies `body` (B1) and `with` (B2) and places its result
-/// (see [`World::boolean`]). Returns the edit to journal, carrying the result's shells as
-/// polygons, with the outcome.
+/// (see [`World::boolean`]). A solution computed ahead is taken instead of running the
+/// kernel when `world` is still on its basis ([`World::on_basis`]). Returns the edit to
+/// journal, carrying the result's shells as polygons, with the outcome.
 ///
 /// Refused, with the world unchanged, for an unknown id (before the kernel runs), or as
 /// [`World::boolean_solution`] and [`World::place_boolean`] refuse.
 pub(super) fn run(
     world: &mut World,
-    body: u64,
-    with: u64,
-    op: Op,
-    keep_with: bool,
+    (body, with, op, keep_with): (u64, u64, Op, bool),
+    ahead: Option<Solved>,
 ) -> Result<(Edit, Outcome), EditError> {
     let (b1, b2) = (body_id(world, body)?, body_id(world, with)?);
-    let solution = world.boolean_solution(b1, b2, op)?;
+    let solution = match ahead {
+        Some(solved) if world.on_basis(&solved.basis) => solved.solution?,
+        _ => world.boolean_solution(b1, b2, op)?,
+    };
     let shells: Vec<ShellRef<'_, Vec<u32>>> = solution.shells.iter().map(Into::into).collect();
     let placed = world.place_boolean(b1, b2, keep_with, &shells)?;
     drop(shells);
@@ -101,7 +122,8 @@ fn outcome(body: u64, placed: &BooleanOutcome) -> Outcome {
 mod tests {
     use super::*;
     use crate::edit::apply;
-    use crate::edit::command::{CreateBody, Shape};
+    use crate::edit::command::{CreateBody, PatchBody, Shape};
+    use crate::edit::plan_on;
     use crate::model::{Pose, Serial};
     use glam::DVec3;
 
@@ -229,5 +251,54 @@ mod tests {
             assert!(!e.to_string().is_empty());
         }
         assert_eq!(w.revision(), 2);
+    }
+
+    /// A boolean solved ahead on a snapshot is placed as the kernel run on the world
+    /// would place it; after an operand has moved, the stale solution is not placed:
+    /// the kernel runs again on the world as it is.
+    #[test]
+    fn a_boolean_solved_ahead_is_placed_only_on_the_same_basis() {
+        let w0 = world();
+        let b = w0.find_by_name("b").expect("b").get();
+        let request = Edit::Boolean {
+            body: 2,
+            with: b,
+            op: Op::Intersection,
+            keep_with: false,
+        };
+        let snapshot = w0.clone();
+        let volume = |o: &Outcome| o.pieces.as_ref().expect("pieces")[0].volume;
+        // The same world: the result and the world after it are those of a direct run.
+        let planned =
+            plan_on(Box::new(request.clone()), &snapshot, w0.next_serial()).expect("planned");
+        let (mut live, mut direct) = (w0.clone(), w0.clone());
+        let (journaled, got) = planned.apply(&mut live);
+        let got = got.expect("placed");
+        let want = apply(&mut direct, &request).expect("placed");
+        assert!(matches!(*journaled, Edit::BooleanResult { .. }));
+        assert!((volume(&got) - 4.0).abs() < 1e-12, "{}", volume(&got));
+        assert_eq!(volume(&got), volume(&want));
+        assert_eq!(
+            serde_json::to_value(&live).expect("serializes"),
+            serde_json::to_value(&direct).expect("serializes")
+        );
+        // B moved after the snapshot: the overlap halves, as a direct run finds.
+        let planned =
+            plan_on(Box::new(request.clone()), &snapshot, w0.next_serial()).expect("planned");
+        let mut moved = w0.clone();
+        let shift = Edit::PatchBody {
+            body: b,
+            patch: PatchBody {
+                pose: Some(Pose::from_translation(DVec3::new(1.5, 0.0, 0.0))),
+                ..PatchBody::default()
+            },
+        };
+        apply(&mut moved, &shift).expect("moved");
+        let mut direct = moved.clone();
+        let (_, got) = planned.apply(&mut moved);
+        let got = got.expect("placed");
+        let want = apply(&mut direct, &request).expect("placed");
+        assert!((volume(&got) - 2.0).abs() < 1e-12, "{}", volume(&got));
+        assert_eq!(volume(&got), volume(&want));
     }
 }

@@ -9,6 +9,7 @@
 //! takes its place in the world's serials when inserted (see [`Built`]).
 
 use super::apply::{Edit, EditError, Outcome, apply_prepared, build_checked, shape_faces};
+use super::boolean::Solved;
 use crate::model::{Built, Camera, Light, Serial, World};
 
 /// Faces from which a new body is worth building away from the world's owner: below
@@ -26,6 +27,8 @@ pub(super) enum Prepared {
     Camera(Camera),
     /// The light described, checked.
     Light(Light),
+    /// A boolean solved on a snapshot (boxed: the other plans are small).
+    Boolean(Box<Solved>),
 }
 
 /// Does the world-free work of `edit`, numbering a new body for a world whose next
@@ -64,6 +67,21 @@ pub fn plan_expecting(edit: Box<Edit>, next: Serial) -> Result<Planned, EditErro
     Ok(Planned { edit, prepared })
 }
 
+/// Plans `edit` with a snapshot of the world at hand: as [`plan_expecting`], and a
+/// boolean ([`Edit::Boolean`]) is solved on the snapshot, so that the owner only places
+/// its result, if the world is still on the same basis when the plan is applied (else
+/// the owner runs the kernel itself). Any snapshot gives the same result.
+pub fn plan_on(edit: Box<Edit>, snapshot: &World, next: Serial) -> Result<Planned, EditError> {
+    if let Edit::Boolean { body, with, op, .. } = *edit {
+        let prepared = match super::boolean::solve_ahead(snapshot, body, with, op) {
+            Some(solved) => Prepared::Boolean(Box::new(solved)),
+            None => Prepared::Nothing,
+        };
+        return Ok(Planned { edit, prepared });
+    }
+    plan_expecting(edit, next)
+}
+
 impl Planned {
     /// The edit planned.
     pub fn edit(&self) -> &Edit {
@@ -83,7 +101,11 @@ impl Planned {
             keep_with,
         } = *self.edit
         {
-            return match super::boolean::run(world, body, with, op, keep_with) {
+            let ahead = match self.prepared {
+                Prepared::Boolean(solved) => Some(*solved),
+                _ => None,
+            };
+            return match super::boolean::run(world, (body, with, op, keep_with), ahead) {
                 Ok((journaled, outcome)) => (Box::new(journaled), Ok(outcome)),
                 Err(e) => (self.edit, Err(e)),
             };
@@ -95,12 +117,19 @@ impl Planned {
 
 impl Edit {
     /// Whether planning this edit is worth a thread of its own: it builds a body of at
-    /// least [`HEAVY_FACES`] faces.
+    /// least [`HEAVY_FACES`] faces, or it is a boolean (planned on a snapshot with
+    /// [`plan_on`]).
     pub fn is_heavy(&self) -> bool {
         match self {
             Edit::CreateBody(req) => shape_faces(&req.shape) >= HEAVY_FACES,
+            Edit::Boolean { .. } => true,
             _ => false,
         }
+    }
+
+    /// Whether planning this edit wants a snapshot of the world ([`plan_on`]).
+    pub fn wants_snapshot(&self) -> bool {
+        matches!(self, Edit::Boolean { .. })
     }
 }
 

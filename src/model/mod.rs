@@ -37,6 +37,6 @@ pub use range::RangeError;
 pub use topology::{Around, EdgeUse, Link};
 pub use transform::{Frame, Moves, Transform, TransformError};
 pub use world::{
-    BooleanOutcome, Built, Entangled, Killed, Named, Piece, Register, ShellRef, UngluedBodies,
-    World, WorldError,
+    BooleanBasis, BooleanOutcome, Built, Entangled, Killed, Named, Piece, Register, ShellRef,
+    UngluedBodies, World, WorldError,
 };

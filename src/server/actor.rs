@@ -17,7 +17,9 @@
 //! An edit is planned before it is queued ([`crate::edit::plan`]): the work that needs
 //! no world runs on the requester's task, or, for a large body, on a blocking thread (at
 //! most one per core), so the owner only inserts what was built and other writes are not
-//! held up behind the build.
+//! held up behind the build. A boolean is solved the same way on the newest snapshot;
+//! the owner places its result if both bodies are still as the snapshot had them, and
+//! solves it again itself otherwise.
 //!
 //! When the queue is full, writes are refused at once with [`WriteError::Busy`] (the HTTP
 //! layer answers 503 with `Retry-After`) rather than queued without bound.
@@ -30,7 +32,7 @@ use tokio::sync::{Semaphore, mpsc, oneshot};
 
 use super::changes::{self, Change};
 use super::events::Feed;
-use crate::edit::{Edit, EditError, Outcome, Planned, plan, plan_expecting};
+use crate::edit::{Edit, EditError, Outcome, Planned, plan, plan_expecting, plan_on};
 use crate::model::{Serial, World};
 
 /// How many requests may wait for the owner by default.
@@ -269,13 +271,19 @@ impl Handle {
     }
 
     /// Plans `edit`: here if it is light, else on a blocking thread once one of the
-    /// planners' turns is free. A requester that stops waiting does not stop a build
-    /// under way; its turn is given back when the build ends.
+    /// planners' turns is free; a boolean is solved there on the newest snapshot, so the
+    /// owner only places its result. A requester that stops waiting does not stop a
+    /// build under way; its turn is given back when the build ends.
     async fn plan(&self, edit: Edit) -> Result<Planned, WriteError> {
         let edit = Box::new(edit);
         if !edit.is_heavy() {
             return plan(edit).map_err(WriteError::Refused);
         }
+        let snapshot = if edit.wants_snapshot() {
+            Some(self.snapshot().await.map_err(|_| WriteError::Stopped)?)
+        } else {
+            None
+        };
         let turn = self
             .planners
             .clone()
@@ -287,7 +295,10 @@ impl Handle {
         let built = tokio::task::spawn_blocking(move || {
             let _turn = turn;
             let _counted = counted;
-            plan_expecting(edit, next)
+            match snapshot {
+                Some(world) => plan_on(edit, &world, next),
+                None => plan_expecting(edit, next),
+            }
         })
         .await;
         match built {

@@ -101,6 +101,47 @@ impl std::fmt::Display for Entangled {
     }
 }
 
+/// What a boolean is computed from: the two operands' polyhedra and B2's place in B1's
+/// frame ([`World::boolean_basis`]). It needs no world, so a solution can be computed
+/// from a snapshot, away from the world's owner, and placed later if the world is still
+/// on the same basis ([`World::on_basis`]).
+#[derive(Clone, Debug)]
+pub struct BooleanBasis {
+    ids: [BodyId; 2],
+    bodies: [Arc<Body>; 2],
+    place: DAffine3,
+}
+
+impl BooleanBasis {
+    /// Runs the kernel: B1 in its own frame, B2 at its place. Refused with the kernel's
+    /// refusal ([`WorldError::Boolean`], naming the body), or [`WorldError::BooleanFailed`]
+    /// if the kernel panicked.
+    pub fn solve(&self, op: Op) -> Result<Solution, WorldError> {
+        let [b1, b2] = self.ids;
+        let a = Operand {
+            body: &self.bodies[0],
+            place: DAffine3::IDENTITY,
+        };
+        let b = Operand {
+            body: &self.bodies[1],
+            place: self.place,
+        };
+        // The kernel only reads: a panic in it changes nothing, so it is answered as a
+        // failure of this write instead of taking the owner down.
+        match catch_unwind(AssertUnwindSafe(|| boolean::boolean(a, b, op))) {
+            Ok(Ok(solution)) => Ok(solution),
+            Ok(Err(error)) => {
+                let body = match operand_of(&error) {
+                    Which::A => b1,
+                    Which::B => b2,
+                };
+                Err(WorldError::Boolean { body, error })
+            }
+            Err(panic) => Err(WorldError::BooleanFailed(panic_text(&*panic))),
+        }
+    }
+}
+
 /// The detail of a kernel refusal, the operand named by its body id.
 pub(super) fn refusal_message(body: &BodyId, error: &boolean::BooleanError) -> String {
     use boolean::BooleanError as E;
@@ -151,7 +192,8 @@ impl World {
 
     /// Runs the boolean kernel on `b1` (operand A, its own frame: the identity place)
     /// and `b2` (operand B, placed by `world_pose(b1)⁻¹ ∘ world_pose(b2)`), changing
-    /// nothing. The shells are in `b1`'s frame.
+    /// nothing. The shells are in `b1`'s frame. [`World::boolean_basis`] then
+    /// [`BooleanBasis::solve`].
     ///
     /// Refused before the kernel runs for an unknown body ([`WorldError::UnknownBody`]),
     /// the root ([`WorldError::Root`]), or the same body twice or a body and one of its
@@ -159,31 +201,35 @@ impl World {
     /// ([`WorldError::Boolean`], naming the body), or [`WorldError::BooleanFailed`] if
     /// the kernel panicked.
     pub fn boolean_solution(&self, b1: BodyId, b2: BodyId, op: Op) -> Result<Solution, WorldError> {
+        self.boolean_basis(b1, b2)?.solve(op)
+    }
+
+    /// What a boolean of `b1` and `b2` would be computed from, as the world stands:
+    /// both polyhedra and B2's place in B1's frame. Refused as
+    /// [`World::boolean_solution`] refuses before the kernel runs.
+    pub fn boolean_basis(&self, b1: BodyId, b2: BodyId) -> Result<BooleanBasis, WorldError> {
         self.check_operands(b1, b2)?;
         let (n1, n2) = (self.live(b1)?, self.live(b2)?);
         let w1 = self.tree.world_pose_of(b1, n1);
         let w2 = self.tree.world_pose_of(b2, n2);
-        let a = Operand {
-            body: &n1.body,
-            place: DAffine3::IDENTITY,
-        };
-        let b = Operand {
-            body: &n2.body,
+        Ok(BooleanBasis {
+            ids: [b1, b2],
+            bodies: [n1.body.clone(), n2.body.clone()],
             place: w1.inverse().compose(&w2).to_affine(),
-        };
-        // The kernel only reads the world: a panic in it leaves the world as it was, so
-        // it is answered as a failure of this write instead of taking the owner down.
-        match catch_unwind(AssertUnwindSafe(|| boolean::boolean(a, b, op))) {
-            Ok(Ok(solution)) => Ok(solution),
-            Ok(Err(error)) => {
-                let body = match operand_of(&error) {
-                    Which::A => b1,
-                    Which::B => b2,
-                };
-                Err(WorldError::Boolean { body, error })
-            }
-            Err(panic) => Err(WorldError::BooleanFailed(panic_text(&*panic))),
-        }
+        })
+    }
+
+    /// Whether a solution computed on `basis` (on this world or an earlier snapshot of
+    /// it) is the one the kernel would compute now: both bodies hold the very same
+    /// polyhedra (a write to a body replaces its `Arc`; the basis keeps the old ones
+    /// alive, so an address is never reused) and B2 has the same place in B1's frame.
+    pub fn on_basis(&self, basis: &BooleanBasis) -> bool {
+        self.boolean_basis(basis.ids[0], basis.ids[1])
+            .is_ok_and(|now| {
+                Arc::ptr_eq(&now.bodies[0], &basis.bodies[0])
+                    && Arc::ptr_eq(&now.bodies[1], &basis.bodies[1])
+                    && now.place == basis.place
+            })
     }
 
     /// Puts a boolean's result into the world as one write: the first of `shells`

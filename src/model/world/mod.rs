@@ -54,7 +54,7 @@ mod named;
 mod read;
 mod tree;
 
-pub use boolean::{BooleanOutcome, Entangled, Piece, ShellRef};
+pub use boolean::{BooleanBasis, BooleanOutcome, Entangled, Piece, ShellRef};
 pub use insert::Built;
 pub use named::{Named, Register};
 
