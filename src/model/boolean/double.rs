@@ -55,7 +55,7 @@ impl Dd {
 
 /// `a + b` as the rounded sum and its exact error (Knuth's TwoSum).
 #[inline]
-fn two_sum(a: f64, b: f64) -> (f64, f64) {
+pub(super) fn two_sum(a: f64, b: f64) -> (f64, f64) {
     let s = a + b;
     let bv = s - a;
     let av = s - bv;
@@ -71,9 +71,10 @@ fn split(a: f64) -> (f64, f64) {
 }
 
 /// `a · b` as the rounded product and its exact error (Dekker's TwoProduct); the error
-/// is NaN where the split could overflow.
+/// is NaN where the split could overflow. Exact above the subnormal range (the caller
+/// rules that out).
 #[inline]
-fn two_product(a: f64, b: f64) -> (f64, f64) {
+pub(super) fn two_product(a: f64, b: f64) -> (f64, f64) {
     let p = a * b;
     if !p.is_finite() || a.abs() > HUGE || b.abs() > HUGE {
         return (p, f64::NAN);

@@ -13,7 +13,7 @@ use std::ops::{Add, Mul, Neg, Sub};
 
 use num_bigint::{BigInt, Sign};
 
-use super::double::Dd;
+use super::double::{Dd, two_product, two_sum};
 use num_traits::{Signed, ToPrimitive, Zero};
 
 /// The numbers a predicate is evaluated in: a commutative ring holding every f64.
@@ -79,7 +79,7 @@ impl Add for Fx {
     #[inline]
     fn add(self, o: Fx) -> Fx {
         let v = self.v + o.v;
-        let e = if self.e == 0.0 && o.e == 0.0 && two_sum_error(self.v, o.v, v) == 0.0 {
+        let e = if self.e == 0.0 && o.e == 0.0 && two_sum(self.v, o.v).1 == 0.0 {
             0.0
         } else {
             (self.e + o.e + v.abs() * U + FLOOR) * GROW
@@ -115,7 +115,7 @@ impl Mul for Fx {
         let exact = self.e == 0.0
             && o.e == 0.0
             && (v == 0.0 || v.abs() >= f64::MIN_POSITIVE * 2f64.powi(54))
-            && two_product_error(self.v, o.v, v) == 0.0;
+            && two_product(self.v, o.v).1 == 0.0;
         let e = if exact {
             0.0
         } else {
@@ -123,34 +123,6 @@ impl Mul for Fx {
         };
         Fx { v, e }
     }
-}
-
-/// The rounding error of `v = a + b` (Knuth's TwoSum): exact.
-#[inline]
-fn two_sum_error(a: f64, b: f64, v: f64) -> f64 {
-    let bv = v - a;
-    let av = v - bv;
-    (a - av) + (b - bv)
-}
-
-/// Dekker's split of `a` into two halves of 26 bits each.
-#[inline]
-fn split(a: f64) -> (f64, f64) {
-    let c = 134_217_729.0 * a; // 2^27 + 1
-    let hi = c - (c - a);
-    (hi, a - hi)
-}
-
-/// The rounding error of `v = a · b` (Dekker's TwoProduct): exact barring overflow
-/// and underflow, which the caller rules out.
-#[inline]
-fn two_product_error(a: f64, b: f64, v: f64) -> f64 {
-    if !v.is_finite() || a.abs() > 1e290 || b.abs() > 1e290 {
-        return f64::NAN;
-    }
-    let (ah, al) = split(a);
-    let (bh, bl) = split(b);
-    al * bl - (((v - ah * bh) - al * bh) - ah * bl)
 }
 
 /// An exact dyadic rational `m · 2^x`. The mantissa is held in an `i128` while it fits
