@@ -30,8 +30,6 @@ pub(crate) struct Mesh {
     pub boxes: Vec<[DVec3; 2]>,
     /// Whether the operand is everted (its interior is unbounded).
     pub everted: bool,
-    /// The bounding box of the whole mesh.
-    pub bounds: [DVec3; 2],
 }
 
 /// Reads both operands into one point table and two meshes.
@@ -93,10 +91,6 @@ fn mesh(
     }
     merge_flat_neighbours(pts, body, &pid, &first_tri, &mut m);
     m.everted = six_volume < 0.0;
-    m.bounds = m.boxes.iter().fold(
-        [DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)],
-        |[lo, hi], [a, b]| [lo.min(*a), hi.max(*b)],
-    );
     Ok(m)
 }
 

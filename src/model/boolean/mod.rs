@@ -344,11 +344,12 @@ pub fn boolean(a: Operand<'_>, b: Operand<'_>, op: Op) -> Result<Solution, Boole
     let mut laps = Laps::start();
     let (mut pts, ma, mb) = mesh::meshes(a, b)?;
     laps.mark("mesh");
-    check_self(&mut pts, &ma, Which::A)?;
-    check_self(&mut pts, &mb, Which::B)?;
+    let (cull_a, cull_b) = (Culling::new(&pts, &ma), Culling::new(&pts, &mb));
+    check_self(&mut pts, &ma, &cull_a, Which::A)?;
+    check_self(&mut pts, &mb, &cull_b, Which::B)?;
     laps.mark("check");
     let mut traces = intersect::Traces::default();
-    let pairs = candidates(&pts, &ma, &mb);
+    let pairs = candidates((&ma, &cull_a), (&mb, &cull_b));
     let candidates = pairs.len();
     for (ta, tb) in pairs {
         traces.pair(&mut pts, &ma, ta, &mb, tb);
@@ -459,53 +460,68 @@ fn keeps_b(op: Op, c: Class) -> bool {
     }
 }
 
+/// One operand's triangles ready for culling, made once for the self-check and the
+/// pairing: their corners, their planes and the tree of their boxes.
+struct Culling {
+    corners: Vec<[DVec3; 3]>,
+    planes: Vec<broad::Plane>,
+    tree: broad::Tree,
+}
+
+impl Culling {
+    fn new(pts: &Points, m: &mesh::Mesh) -> Culling {
+        let corners: Vec<[DVec3; 3]> = m.tris.iter().map(|t| t.map(|p| pts.input_at(p))).collect();
+        let planes = corners
+            .iter()
+            .map(|&[a, b, c]| broad::Plane::new(a, b, c))
+            .collect();
+        Culling {
+            corners,
+            planes,
+            tree: broad::Tree::new(&m.boxes),
+        }
+    }
+
+    /// Whether triangle `i` of this operand and triangle `j` of `other` may meet: neither
+    /// lies strictly on one side of the other's plane.
+    fn may_meet(&self, i: usize, other: &Culling, j: usize) -> bool {
+        !other.planes[j].apart(&self.corners[i]) && !self.planes[i].apart(&other.corners[j])
+    }
+}
+
 /// The triangle pairs of `a` and `b` that may meet: their boxes meet and neither
 /// triangle lies strictly on one side of the other's plane. In ascending order.
-fn candidates(pts: &Points, a: &mesh::Mesh, b: &mesh::Mesh) -> Vec<(u32, u32)> {
-    let (ca, cb) = (corners(pts, a), corners(pts, b));
-    let (pa, pb) = (planes(&ca), planes(&cb));
+fn candidates(
+    (a, ca): (&mesh::Mesh, &Culling),
+    (b, cb): (&mesh::Mesh, &Culling),
+) -> Vec<(u32, u32)> {
     let mut pairs = Vec::new();
-    broad::Tree::new(&a.boxes).pairs(
+    ca.tree.pairs(
         &a.boxes,
-        &broad::Tree::new(&b.boxes),
+        &cb.tree,
         &b.boxes,
-        |i, j| {
-            let (i, j) = (i as usize, j as usize);
-            !pb[j].apart(&ca[i]) && !pa[i].apart(&cb[j])
-        },
+        |i, j| ca.may_meet(i as usize, cb, j as usize),
         &mut pairs,
     );
     pairs.sort_unstable();
     pairs
 }
 
-/// Each triangle's corners.
-fn corners(pts: &Points, m: &mesh::Mesh) -> Vec<[DVec3; 3]> {
-    m.tris.iter().map(|t| t.map(|p| pts.input_at(p))).collect()
-}
-
-/// Each triangle's plane, for culling.
-fn planes(corners: &[[DVec3; 3]]) -> Vec<broad::Plane> {
-    corners
-        .iter()
-        .map(|&[a, b, c]| broad::Plane::new(a, b, c))
-        .collect()
-}
-
 /// Refuses an operand whose triangles cross each other (other than along the edges and
 /// at the vertices they share).
-fn check_self(pts: &mut Points, m: &mesh::Mesh, which: Which) -> Result<(), BooleanError> {
-    let corners = corners(pts, m);
-    let planes = planes(&corners);
+fn check_self(
+    pts: &mut Points,
+    m: &mesh::Mesh,
+    cull: &Culling,
+    which: Which,
+) -> Result<(), BooleanError> {
     let mut pairs = Vec::new();
-    broad::Tree::new(&m.boxes).self_pairs(
+    cull.tree.self_pairs(
         &m.boxes,
         |i, j| {
             let (i, j) = (i as usize, j as usize);
             let (t, u) = (m.tris[i], m.tris[j]);
-            !t.iter().any(|p| u.contains(p))
-                && !planes[i].apart(&corners[j])
-                && !planes[j].apart(&corners[i])
+            !t.iter().any(|p| u.contains(p)) && cull.may_meet(i, cull, j)
         },
         &mut pairs,
     );
