@@ -11,24 +11,12 @@ use base64::Engine as _;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
-use support::{Rng, TestServer};
-use winged::model::{Camera, Intrinsics};
+use support::{Rng, TestServer, camera_json, demo_camera};
+use winged::model::Camera;
 
 /// A camera 2 m from the blocks on the demo table, 640 × 480, f = 600.
 fn truth() -> Camera {
-    let target = DVec3::new(0.0, 0.0, 0.8);
-    let eye = target + DVec3::new(0.55, -0.65, 0.52).normalize() * 2.0;
-    let k = Intrinsics::centered(640, 480, 600.0).expect("intrinsics");
-    Camera::look_at(eye, target, DVec3::Z, k).expect("a camera")
-}
-
-/// A camera as `PUT /v1/cameras/{name}` takes it.
-fn camera_json(c: &Camera) -> Value {
-    let k = c.intrinsics;
-    json!({
-        "pose": {"position": c.pose.position.to_array(), "rotation": c.pose.rotation.to_array()},
-        "intrinsics": {"width": k.width, "height": k.height, "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy},
-    })
+    demo_camera()
 }
 
 /// `camera` turned 2° about a random axis and moved 5 cm in a random direction.

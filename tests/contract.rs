@@ -516,6 +516,7 @@ impl Contract {
 fn is_read(template: &str) -> bool {
     template == "/v1/appearance"
         || template == "/v1/camera-solution"
+        || template == "/v1/recognition"
         || template.starts_with("/v1/spatial/")
 }
 
@@ -581,6 +582,7 @@ fn answers_match_the_contract() {
     appearance(&c);
     spatial(&c);
     camera_solution(&c);
+    recognition(&c);
     lights(&c);
     deletes(&c);
     booleans(&c);
@@ -1502,6 +1504,69 @@ fn appearance(c: &Contract) {
                           "intrinsics": {"width": 8, "height": 8, "fx": 8, "fy": 8,
                                          "cx": 4, "cy": 4}}}),
         422,
+        Spec::Either,
+    );
+}
+
+fn recognition(c: &Contract) {
+    use base64::Engine as _;
+    let path = "/v1/recognition";
+    let eye = c.ok("GET", "/v1/cameras/{name}", "/v1/cameras/eye", None);
+    let size = |k: &str| eye["intrinsics"][k].as_u64().expect("a size") as u32;
+    let grey = |width: u32, height: u32| {
+        let mut png = Vec::new();
+        let mut encoder = png::Encoder::new(&mut png, width, height);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder
+            .write_header()
+            .expect("a header")
+            .write_image_data(&vec![90u8; (width * height) as usize])
+            .expect("pixels");
+        base64::engine::general_purpose::STANDARD.encode(png)
+    };
+    let before = c.revision();
+    // A blank picture: whatever the model has in view is absent.
+    let got = c.ok(
+        "POST",
+        path,
+        path,
+        Some(
+            json!({"camera": "eye", "image": grey(size("width"), size("height")),
+                    "unexplained_mask": true}),
+        ),
+    );
+    assert_eq!(got["revision"], before, "{got}");
+    assert!(
+        got["bodies"]
+            .as_array()
+            .expect("bodies")
+            .iter()
+            .all(|b| b["status"] == "absent"),
+        "{got}"
+    );
+    assert_eq!(c.revision(), before, "recognition reads only");
+    c.refused_json(
+        "POST",
+        path,
+        path,
+        json!({"camera": "eye", "image": grey(8, 8)}),
+        422,
+        Spec::Either,
+    );
+    c.refused_json(
+        "POST",
+        path,
+        path,
+        json!({"camera": "eye", "image": "not base64!"}),
+        400,
+        Spec::Either,
+    );
+    c.refused_json(
+        "POST",
+        path,
+        path,
+        json!({"camera": "nobody", "image": grey(8, 8)}),
+        404,
         Spec::Either,
     );
 }

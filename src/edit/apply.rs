@@ -41,6 +41,12 @@ pub enum Edit {
         /// What changes.
         patch: PatchBody,
     },
+    /// Re-pose several bodies at once (recognition's corrections of bodies that moved):
+    /// all or none.
+    PlaceBodies {
+        /// Each body and its new pose relative to its supart.
+        places: Vec<Place>,
+    },
     /// KLBFEV: kill a body with all its parts.
     DeleteBody {
         /// The body.
@@ -149,6 +155,7 @@ impl Edit {
         match self {
             Edit::CreateBody(_) => "create_body",
             Edit::PatchBody { .. } => "patch_body",
+            Edit::PlaceBodies { .. } => "place_bodies",
             Edit::DeleteBody { .. } => "delete_body",
             Edit::Euler { .. } => "euler",
             Edit::Transform { .. } => "transform",
@@ -163,6 +170,15 @@ impl Edit {
             Edit::Boolean { .. } | Edit::BooleanResult { .. } => "boolean",
         }
     }
+}
+
+/// One body's new place: its pose relative to its supart.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Place {
+    /// The body.
+    pub body: u64,
+    /// Its new pose relative to its supart.
+    pub pose: Pose,
 }
 
 /// What an applied edit made or changed, by id.
@@ -468,6 +484,10 @@ pub(super) fn apply_prepared(
                 ..Outcome::default()
             })
         }
+        Edit::PlaceBodies { places } => {
+            place_bodies(world, places)?;
+            Ok(Outcome::default())
+        }
         Edit::DeleteBody { body } => {
             let b = body_id(world, *body)?;
             let killed = world.kill(b)?;
@@ -603,6 +623,19 @@ fn patch_body(world: &mut World, b: BodyId, patch: &PatchBody) -> Result<(), Edi
     let parent = patch.parent.map(|p| body_id(world, p)).transpose()?;
     let name = patch.name.as_ref().map(|n| n.as_deref());
     world.update(b, name, parent, patch.pose, patch.color)?;
+    Ok(())
+}
+
+/// Gives each body its new pose, on a copy of the world that replaces it only when every
+/// body took its pose: a refusal leaves the world as it was. (The world's maps are
+/// persistent, so the copy shares everything the poses do not change.)
+fn place_bodies(world: &mut World, places: &[Place]) -> Result<(), EditError> {
+    let mut next = world.clone();
+    for place in places {
+        let b = body_id(&next, place.body)?;
+        next.update(b, None, None, Some(place.pose), None)?;
+    }
+    *world = next;
     Ok(())
 }
 

@@ -15,5 +15,5 @@ mod boolean;
 pub mod command;
 pub mod plan;
 
-pub use apply::{Edit, EditError, MAX_BODY_FACES, Outcome, PieceOutcome, apply};
+pub use apply::{Edit, EditError, MAX_BODY_FACES, Outcome, PieceOutcome, Place, apply};
 pub use plan::{HEAVY_FACES, Planned, plan, plan_expecting, plan_on};

@@ -18,7 +18,7 @@ use std::ops::Range;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use crate::model::{BodyId, Bounds, Color, FaceId, Light, World};
+use crate::model::{BodyId, Bounds, Color, FaceId, Light, Pose, World};
 
 use super::cache::ShadowCache;
 
@@ -208,6 +208,83 @@ impl Scene {
         e.faces
             .iter()
             .any(|&f| self.faces[f as usize].faces_toward(eye))
+    }
+
+    /// The points of body `b` (an index into [`Scene::bodies`]): indices into
+    /// [`Scene::points`], ascending, each once. Empty for no such body.
+    pub fn body_points(&self, b: usize) -> Vec<u32> {
+        let mut points: Vec<u32> = self
+            .faces
+            .iter()
+            .filter(|f| f.body as usize == b)
+            .flat_map(|f| self.ring(f).iter().copied())
+            .collect();
+        points.sort_unstable();
+        points.dedup();
+        points
+    }
+
+    /// A copy of the scene with body `b` moved by `motion` (world points `X ↦
+    /// motion·X`): its `points` (as [`Scene::body_points`] gives them) and its faces'
+    /// planes. Its inverse is the move by `motion.inverse()`, up to rounding. The bounds
+    /// are those of the unmoved scene; the copy starts without shadow maps.
+    pub fn with_body_moved(&self, b: usize, points: &[u32], motion: &Pose) -> Scene {
+        let mut scene = self.clone();
+        for &i in points {
+            if let Some(p) = scene.points.get_mut(i as usize) {
+                *p = motion.transform_point(*p);
+            }
+        }
+        for face in scene.faces.iter_mut().filter(|f| f.body as usize == b) {
+            let normal = motion.transform_vector(face.normal);
+            face.offset += normal.dot(motion.position);
+            face.normal = normal;
+        }
+        scene
+    }
+
+    /// A copy of the scene without the faces, triangles and edges of the bodies for
+    /// which `drop` holds (their entries in [`Scene::bodies`] and their points stay, so
+    /// that every index into those lists keeps its meaning).
+    pub fn without_bodies(&self, drop: impl Fn(usize) -> bool) -> Scene {
+        let mut renumber = vec![u32::MAX; self.faces.len()];
+        let mut faces = Vec::with_capacity(self.faces.len());
+        for (i, f) in self.faces.iter().enumerate() {
+            if !drop(f.body as usize) {
+                renumber[i] = faces.len() as u32;
+                faces.push(f.clone());
+            }
+        }
+        let (triangles, triangle_faces) = self
+            .triangles
+            .iter()
+            .zip(&self.triangle_faces)
+            .filter(|&(_, &f)| renumber[f as usize] != u32::MAX)
+            .map(|(&t, &f)| (t, renumber[f as usize]))
+            .unzip();
+        let edges = self
+            .edges
+            .iter()
+            .filter(|e| !drop(e.body as usize))
+            .map(|e| SceneEdge {
+                faces: e.faces.map(|f| renumber[f as usize]),
+                ..*e
+            })
+            .collect();
+        Scene {
+            revision: self.revision,
+            bodies: self.bodies.clone(),
+            points: self.points.clone(),
+            point_serials: self.point_serials.clone(),
+            faces,
+            rings: self.rings.clone(),
+            triangles,
+            triangle_faces,
+            edges,
+            lights: self.lights.clone(),
+            bounds: self.bounds,
+            shadows: ShadowCache::default(),
+        }
     }
 
     /// The perimeter of face `f` as indices into [`Scene::points`].

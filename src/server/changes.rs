@@ -223,6 +223,11 @@ pub fn describe(
                 parts_of(&mut changes, new);
             }
         }
+        Edit::PlaceBodies { places } => {
+            for place in places {
+                changes.push(EntityChange::body(Updated, place.body, &[Field::Pose]));
+            }
+        }
         Edit::DeleteBody { body } => {
             changes.extend(
                 outcome

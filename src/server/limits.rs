@@ -226,6 +226,76 @@ pub fn png_size(bytes: &[u8]) -> Result<(u32, u32), ImageError> {
 /// [`ImageError::NotPng`], [`ImageError::Corrupt`] (malformed, truncated, bad checksum),
 /// [`ImageError::TooLarge`], [`ImageError::TooWide`], [`ImageError::WorkingMemory`].
 pub fn decode_png(bytes: &[u8], limits: &ImageLimits) -> Result<DecodedImage, ImageError> {
+    let mut reader = open_png(bytes, limits, Transformations::normalize_to_color8())?;
+    let (color, depth) = reader.output_color_type();
+    let channels: u8 = match color {
+        ColorType::Grayscale => 1,
+        ColorType::GrayscaleAlpha => 2,
+        ColorType::Rgb => 3,
+        ColorType::Rgba => 4,
+        ColorType::Indexed => {
+            return Err(ImageError::Corrupt("the palette was not expanded".into()));
+        }
+    };
+    if depth != BitDepth::Eight {
+        return Err(ImageError::Corrupt(format!(
+            "samples decode to {} bits, not 8",
+            depth as u8
+        )));
+    }
+    let (width, height, pixels) = read_frame(&mut reader, channels, limits)?;
+    Ok(DecodedImage {
+        width,
+        height,
+        channels,
+        pixels,
+    })
+}
+
+/// A depth picture: 16-bit grey samples, row-major.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DecodedDepth {
+    /// Width, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// `width × height` samples.
+    pub units: Vec<u16>,
+}
+
+/// Decodes a depth picture: a 16-bit greyscale PNG, within `limits` as [`decode_png`]
+/// holds colour pictures to them.
+///
+/// # Errors
+/// As [`decode_png`]'s, and [`ImageError::Corrupt`] for a PNG that is not 16-bit grey.
+pub fn decode_depth_png(bytes: &[u8], limits: &ImageLimits) -> Result<DecodedDepth, ImageError> {
+    let mut reader = open_png(bytes, limits, Transformations::IDENTITY)?;
+    let (color, depth) = reader.output_color_type();
+    if (color, depth) != (ColorType::Grayscale, BitDepth::Sixteen) {
+        return Err(ImageError::Corrupt(format!(
+            "a depth picture must be 16-bit grey, not {} bits of {color:?}",
+            depth as u8
+        )));
+    }
+    let (width, height, bytes) = read_frame(&mut reader, 2, limits)?;
+    let units = bytes
+        .chunks_exact(2)
+        .map(|b| u16::from_be_bytes([b[0], b[1]]))
+        .collect();
+    Ok(DecodedDepth {
+        width,
+        height,
+        units,
+    })
+}
+
+/// Checks a PNG's encoded size, signature and header against `limits` and reads the
+/// chunks before its pixels, decoding with `transformations`.
+fn open_png<'a>(
+    bytes: &'a [u8],
+    limits: &ImageLimits,
+    transformations: Transformations,
+) -> Result<png::Reader<Cursor<&'a [u8]>>, ImageError> {
     if bytes.len() > limits.max_encoded_bytes {
         return Err(ImageError::TooLarge {
             what: Measure::Encoded,
@@ -244,7 +314,7 @@ pub fn decode_png(bytes: &[u8], limits: &ImageLimits) -> Result<DecodedImage, Im
     decoder.set_limits(png::Limits {
         bytes: limits.max_decoded_bytes,
     });
-    decoder.set_transformations(Transformations::normalize_to_color8());
+    decoder.set_transformations(transformations);
 
     let header = decoder
         .read_header_info()
@@ -264,44 +334,31 @@ pub fn decode_png(bytes: &[u8], limits: &ImageLimits) -> Result<DecodedImage, Im
     if least > limits.max_decoded_bytes as u64 {
         return Err(too_large_decoded(least, limits));
     }
-
     // Reads the chunks before the first IDAT; no pixel data yet.
-    let mut reader = decoder.read_info().map_err(|e| decoding_error(e, limits))?;
-    let (color, depth) = reader.output_color_type();
-    let channels: u8 = match color {
-        ColorType::Grayscale => 1,
-        ColorType::GrayscaleAlpha => 2,
-        ColorType::Rgb => 3,
-        ColorType::Rgba => 4,
-        ColorType::Indexed => {
-            return Err(ImageError::Corrupt("the palette was not expanded".into()));
-        }
-    };
-    if depth != BitDepth::Eight {
-        return Err(ImageError::Corrupt(format!(
-            "samples decode to {} bits, not 8",
-            depth as u8
-        )));
-    }
-    let exact = u64::from(width)
-        .saturating_mul(u64::from(height))
-        .saturating_mul(u64::from(channels));
+    decoder.read_info().map_err(|e| decoding_error(e, limits))
+}
+
+/// Reads the image of `reader`, whose samples take `bytes_per_pixel` bytes, within
+/// `limits`: its width, height and bytes.
+fn read_frame(
+    reader: &mut png::Reader<Cursor<&[u8]>>,
+    bytes_per_pixel: u8,
+    limits: &ImageLimits,
+) -> Result<(u32, u32, Vec<u8>), ImageError> {
+    let info = reader.info();
+    let exact = u64::from(info.width)
+        .saturating_mul(u64::from(info.height))
+        .saturating_mul(u64::from(bytes_per_pixel));
     let size = match reader.output_buffer_size() {
         Some(size) if size as u64 <= limits.max_decoded_bytes as u64 => size,
         _ => return Err(too_large_decoded(exact, limits)),
     };
-
     let mut pixels = vec![0u8; size];
     let frame = reader
         .next_frame(&mut pixels)
         .map_err(|e| decoding_error(e, limits))?;
     pixels.truncate(frame.buffer_size());
-    Ok(DecodedImage {
-        width: frame.width,
-        height: frame.height,
-        channels,
-        pixels,
-    })
+    Ok((frame.width, frame.height, pixels))
 }
 
 #[cfg(test)]

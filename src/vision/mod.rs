@@ -19,6 +19,7 @@
 //! [`render`]: crate::render
 
 pub mod image;
+pub mod recognize;
 pub mod solve;
 #[cfg(test)]
 mod testing;

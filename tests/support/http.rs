@@ -264,3 +264,21 @@ impl Rng {
         }
     }
 }
+
+/// A camera as `PUT /v1/cameras/{name}` takes it.
+pub fn camera_json(c: &winged::model::Camera) -> Value {
+    let k = c.intrinsics;
+    serde_json::json!({
+        "pose": {"position": c.pose.position.to_array(), "rotation": c.pose.rotation.to_array()},
+        "intrinsics": {"width": k.width, "height": k.height, "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy},
+    })
+}
+
+/// A camera 2 m from the blocks on the demo table, in front of its long side and to
+/// the right: 640 × 480, f = 600.
+pub fn demo_camera() -> winged::model::Camera {
+    let target = glam::DVec3::new(0.0, 0.0, 0.8);
+    let eye = target + glam::DVec3::new(0.55, -0.65, 0.52).normalize() * 2.0;
+    let k = winged::model::Intrinsics::centered(640, 480, 600.0).expect("intrinsics");
+    winged::model::Camera::look_at(eye, target, glam::DVec3::Z, k).expect("a camera")
+}

@@ -146,6 +146,27 @@ pub enum CameraRef {
     Inline(Box<CameraReq>),
 }
 
+impl CameraRef {
+    /// The camera named (404 when the world has none of that name) or given inline
+    /// (422 `invalid-camera` when it is not a valid camera).
+    pub fn resolve(&self, world: &World) -> Result<Camera, Problem> {
+        match self {
+            CameraRef::Named(name) => world
+                .camera(name)
+                .copied()
+                .ok_or_else(|| Problem::not_found(format!("no camera is named {name:?}"))),
+            CameraRef::Inline(req) => req.to_camera().map_err(|e| {
+                Problem::new(
+                    StatusCode::UNPROCESSABLE_ENTITY,
+                    "invalid-camera",
+                    "Invalid camera",
+                    e.to_string(),
+                )
+            }),
+        }
+    }
+}
+
 /// A drawing checked and resolved against a camera.
 struct Plan {
     camera: Camera,
@@ -292,19 +313,7 @@ pub(super) async fn appearance(
 /// Resolves the camera on a snapshot, then renders and encodes off the async threads.
 async fn draw(state: &AppState, camera: CameraRef, drawing: Drawing) -> Answer {
     let world = snapshot(&state.handle).await?;
-    let camera = match camera {
-        CameraRef::Named(name) => *world
-            .camera(&name)
-            .ok_or_else(|| Problem::not_found(format!("no camera is named {name:?}")))?,
-        CameraRef::Inline(req) => req.to_camera().map_err(|e| {
-            Problem::new(
-                StatusCode::UNPROCESSABLE_ENTITY,
-                "invalid-camera",
-                "Invalid camera",
-                e.to_string(),
-            )
-        })?,
-    };
+    let camera = camera.resolve(&world)?;
     let appearance = state.appearance.clone();
     let plan = drawing.plan(camera, appearance.max_pixels)?;
     let _turn = appearance

@@ -258,7 +258,7 @@ fn unprocessable(kind: &'static str, title: &'static str, detail: impl Into<Stri
 }
 
 /// The problem answer of a solve that failed.
-fn solve_problem(e: SolveError) -> Problem {
+pub(super) fn solve_problem(e: SolveError) -> Problem {
     let detail = e.to_string();
     match e {
         SolveError::TooFewPoints { .. } => {
@@ -683,14 +683,7 @@ async fn from_image(
     image: &str,
     initial: &CameraRef,
 ) -> Result<Outcome, Problem> {
-    let start = match initial {
-        CameraRef::Named(name) => *world
-            .camera(name)
-            .ok_or_else(|| Problem::not_found(format!("no camera is named {name:?}")))?,
-        CameraRef::Inline(req) => req
-            .to_camera()
-            .map_err(|e| unprocessable("invalid-camera", "Invalid camera", e.to_string()))?,
-    };
+    let start = initial.resolve(&world)?;
     let limits = ImageLimits::default();
     let image = image.trim();
     refuse_before_decoding(image, &start, &limits)?;
@@ -760,7 +753,7 @@ const PNG_HEADER_BASE64: usize = PNG_HEADER_BYTES.div_ceil(3) * 4;
 ///
 /// Text that is no valid base64, or no PNG, passes: the full decode refuses it and
 /// says why.
-fn refuse_before_decoding(
+pub(super) fn refuse_before_decoding(
     image: &str,
     camera: &Camera,
     limits: &ImageLimits,

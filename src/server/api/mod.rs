@@ -13,6 +13,7 @@ mod model;
 mod named;
 mod ops;
 pub mod precondition;
+mod recognition;
 pub mod spatial;
 pub mod whole_numbers;
 
@@ -125,6 +126,7 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
             "/v1/camera-solution",
             reads(post(camera_solution::camera_solution)),
         )
+        .route("/v1/recognition", reads(post(recognition::recognition)))
         .route(
             "/v1/cameras/{name}",
             reads(get(named::get_one::<Camera>)).merge(writes(

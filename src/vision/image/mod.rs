@@ -12,6 +12,8 @@
 //! * [`DistanceField`]: the exact Euclidean distance transform of a set of pixels
 //!   (Felzenszwalb–Huttenlocher), with the nearest of those pixels for every pixel, so an
 //!   edge can be found from any point of the image in constant time.
+//! * [`trace_regions`]: the 4-connected regions of a binary [`Mask`] as polygons with
+//!   holes ([`Region`]), traced along pixel cracks and simplified ([`ContourOptions`]).
 //!
 //! # Why hand-written
 //!
@@ -21,11 +23,13 @@
 //! but not the nearest edge pixel, which the alignment needs. The routines here are
 //! small, and each is tested against a brute-force or analytic answer.
 
+mod contour;
 mod distance;
 mod edges;
 mod error;
 mod luma;
 
+pub use contour::{ContourOptions, Mask, Region, trace_regions};
 pub use distance::{DistanceField, NO_SITE};
 pub use edges::{EdgeMap, EdgeOptions, Edgel};
 pub use error::ImageError;

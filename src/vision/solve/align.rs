@@ -275,63 +275,51 @@ pub fn align_to_image(
             camera_height: k.height,
         });
     }
-    options.validate()?;
-    let levels = Level::pyramid(image, &k, options)?;
+    let pyramid = EdgePyramid::new(image, options)?;
+    align_camera(scene, &start, &pyramid, options)
+}
 
+/// [`align_to_image`] on a picture whose edges are already found: the same method,
+/// preconditions and postconditions, with the pyramid's levels and edges in place of
+/// `options.levels` and `options.edges`. The pyramid must be of a picture of the
+/// camera's size ([`SolveError::ImageSizeMismatch`] otherwise).
+pub fn align_camera(
+    scene: &Scene,
+    start: &Camera,
+    pyramid: &EdgePyramid,
+    options: &AlignOptions,
+) -> Result<Aligned, SolveError> {
+    let start = start.validated()?;
+    let k = start.intrinsics;
+    pyramid.check(&k, options)?;
     let (rotation, translation) = start.to_opencv();
-    let mut pose = PoseEstimate::new(rotation, translation);
-    let edge_faces = EdgeFaces::of(scene);
-    let spacing = options.sample_spacing_px;
-    let first = sample_edges(scene, &edge_faces, &camera_at(&pose, k)?, options, spacing);
-    if first.len() < options.min_samples {
-        return Err(SolveError::NoEdgesVisible {
-            samples: first.len(),
-            needed: options.min_samples,
-        });
-    }
-
-    let mut iterations = 0;
-    let mut converged = false;
-    for (i, level) in levels.iter().enumerate().rev() {
-        let tracking = i == 0 && levels.len() > 1;
-        let outcome = level.refine(scene, &edge_faces, &k, pose, options, tracking)?;
-        pose = outcome.pose;
-        iterations += outcome.iterations;
-        converged = outcome.converged;
-    }
-    if !converged {
-        return Err(SolveError::DidNotConverge { iterations });
-    }
-
-    let camera = camera_at(&pose, k)?;
-    let samples = sample_edges(scene, &edge_faces, &camera, options, spacing);
-    if samples.len() < options.min_samples {
-        return Err(SolveError::NoEdgesVisible {
-            samples: samples.len(),
-            needed: options.min_samples,
-        });
-    }
-    let matcher = levels[0].matcher(options, levels.len() > 1);
-    let fit = matcher.fit(&matcher.associate(&samples, pose), pose, false);
-    let inlier_fraction = fit.inliers as f64 / samples.len() as f64;
-    if inlier_fraction < options.min_inlier_fraction {
-        return Err(SolveError::TooFewInliers {
-            fraction: inlier_fraction,
-            needed: options.min_inlier_fraction,
-        });
-    }
+    let start_pose = PoseEstimate::new(rotation, translation);
+    let drawing = SceneDrawing {
+        scene,
+        edge_faces: EdgeFaces::of(scene),
+        k,
+        options,
+    };
+    let found = pyramid.align(&drawing, start_pose, options)?;
+    let camera = camera_at(&found.pose, k)?;
     Ok(Aligned {
         camera,
-        iterations,
-        rms_px: if fit.inliers == 0 {
-            0.0
-        } else {
-            (fit.inlier_squares / fit.inliers as f64).sqrt()
-        },
-        samples: samples.len(),
-        inlier_fraction,
-        converged,
+        iterations: found.iterations,
+        rms_px: found.rms_px,
+        samples: found.samples,
+        inlier_fraction: found.inlier_fraction,
+        converged: true,
     })
+}
+
+/// What [`EdgePyramid::align`] found: a pose of the drawing that converged on the finest
+/// level and how well its samples lie on the picture's edges.
+struct Found {
+    pose: PoseEstimate,
+    iterations: usize,
+    rms_px: f64,
+    samples: usize,
+    inlier_fraction: f64,
 }
 
 /// The world's camera at `pose` (OpenCV's frame) with intrinsics `k`.
@@ -404,10 +392,22 @@ fn sample_edges(
     options: &AlignOptions,
     spacing_px: f64,
 ) -> Vec<Sample> {
+    sample_pieces(scene, edge_faces, camera, options, spacing_px, |_| true)
+}
+
+/// [`sample_edges`] on the visible pieces for which `keep` holds.
+fn sample_pieces(
+    scene: &Scene,
+    edge_faces: &EdgeFaces,
+    camera: &Camera,
+    options: &AlignOptions,
+    spacing_px: f64,
+    keep: impl Fn(&Segment) -> bool,
+) -> Vec<Sample> {
     let view = View::new(camera, options.near);
     let eye = camera.position();
     let mut samples = Vec::new();
-    for piece in hidden_lines(scene, &view) {
+    for piece in hidden_lines(scene, &view).into_iter().filter(|p| keep(p)) {
         let length = piece.a.distance(piece.b);
         let n = (length / spacing_px).floor();
         if !(n.is_finite() && n >= 1.0) {
@@ -436,14 +436,144 @@ fn sample_edges(
     samples
 }
 
-/// One level of the pyramid: its edges and the camera's intrinsics at its scale.
+/// A picture's edges at several scales, found once and used by every alignment with
+/// that picture ([`align_to_image`], and the alignment of single bodies in recognition).
+pub struct EdgePyramid {
+    /// Finest (the picture itself) first.
+    levels: Vec<Level>,
+}
+
+impl EdgePyramid {
+    /// The edges of `image` and of its halvings: at most `options.levels` levels, each
+    /// side at least 40 pixels (the picture itself is always a level), edges found with
+    /// `options.edges`. Alignments need edges: a picture without any is refused.
+    ///
+    /// Refused with [`SolveError::NoImageEdges`] when the picture has no edges, and with
+    /// [`SolveError::BadParameter`] for options out of range.
+    pub fn new(image: &Luma, options: &AlignOptions) -> Result<EdgePyramid, SolveError> {
+        let pyramid = EdgePyramid::of(image, options)?;
+        if pyramid.finest().edgels().is_empty() {
+            return Err(SolveError::NoImageEdges);
+        }
+        Ok(pyramid)
+    }
+
+    /// [`EdgePyramid::new`] that takes a picture without edges too (a blank picture
+    /// is evidence as well: of nothing there).
+    pub fn of(image: &Luma, options: &AlignOptions) -> Result<EdgePyramid, SolveError> {
+        options.validate()?;
+        let mut levels = Vec::with_capacity(options.levels);
+        let mut current = Some(image.clone());
+        let mut scale = 1.0;
+        while let Some(picture) = current.take() {
+            let edges = EdgeMap::detect(&picture, &options.edges)?;
+            levels.push(Level { scale, edges });
+            if levels.len() < options.levels
+                && picture.width() / 2 >= MIN_LEVEL_SIDE
+                && picture.height() / 2 >= MIN_LEVEL_SIDE
+            {
+                current = picture.half();
+                scale *= 0.5;
+            }
+        }
+        Ok(EdgePyramid { levels })
+    }
+
+    /// The edges of the picture itself (the finest level).
+    pub fn finest(&self) -> &EdgeMap {
+        &self.levels[0].edges
+    }
+
+    /// Refuses an alignment with this pyramid of a camera of intrinsics `k`: the picture
+    /// must be of the camera's size ([`SolveError::ImageSizeMismatch`]) and have edges
+    /// ([`SolveError::NoImageEdges`]), and `options` must be in range.
+    fn check(&self, k: &Intrinsics, options: &AlignOptions) -> Result<(), SolveError> {
+        let (width, height) = self.size();
+        if (width, height) != (k.width, k.height) {
+            return Err(SolveError::ImageSizeMismatch {
+                image_width: width,
+                image_height: height,
+                camera_width: k.width,
+                camera_height: k.height,
+            });
+        }
+        options.validate()?;
+        if self.finest().edgels().is_empty() {
+            return Err(SolveError::NoImageEdges);
+        }
+        Ok(())
+    }
+
+    /// The picture's size, pixels.
+    pub fn size(&self) -> (u32, u32) {
+        let edges = self.finest();
+        (edges.width(), edges.height())
+    }
+
+    /// Aligns `drawing` from `start`, coarsest level first, and judges the pose it ends
+    /// at (see the module documentation). Errors as [`align_to_image`] gives them.
+    fn align<D: Drawing>(
+        &self,
+        drawing: &D,
+        start: PoseEstimate,
+        options: &AlignOptions,
+    ) -> Result<Found, SolveError> {
+        let spacing = options.sample_spacing_px;
+        let first = drawing.samples(&start, spacing)?;
+        if first.len() < options.min_samples {
+            return Err(SolveError::NoEdgesVisible {
+                samples: first.len(),
+                needed: options.min_samples,
+            });
+        }
+        let k = drawing.intrinsics();
+        let mut pose = start;
+        let mut iterations = 0;
+        let mut converged = false;
+        for (i, level) in self.levels.iter().enumerate().rev() {
+            let tracking = i == 0 && self.levels.len() > 1;
+            let outcome = level.refine(drawing, &k, pose, options, tracking)?;
+            pose = outcome.pose;
+            iterations += outcome.iterations;
+            converged = outcome.converged;
+        }
+        if !converged {
+            return Err(SolveError::DidNotConverge { iterations });
+        }
+        let samples = drawing.samples(&pose, spacing)?;
+        if samples.len() < options.min_samples {
+            return Err(SolveError::NoEdgesVisible {
+                samples: samples.len(),
+                needed: options.min_samples,
+            });
+        }
+        let matcher = self.levels[0].matcher(&k, options, self.levels.len() > 1);
+        let fit = matcher.fit(&matcher.associate(&samples, pose), pose, false);
+        let inlier_fraction = fit.inliers as f64 / samples.len() as f64;
+        if inlier_fraction < options.min_inlier_fraction {
+            return Err(SolveError::TooFewInliers {
+                fraction: inlier_fraction,
+                needed: options.min_inlier_fraction,
+            });
+        }
+        Ok(Found {
+            pose,
+            iterations,
+            rms_px: if fit.inliers == 0 {
+                0.0
+            } else {
+                (fit.inlier_squares / fit.inliers as f64).sqrt()
+            },
+            samples: samples.len(),
+            inlier_fraction,
+        })
+    }
+}
+
+/// One level of the pyramid: its edges and its scale.
 struct Level {
     /// Level pixels per picture pixel, `2^−ℓ`.
     scale: f64,
-    fx: f64,
-    fy: f64,
-    cx: f64,
-    cy: f64,
     edges: EdgeMap,
 }
 
@@ -455,46 +585,17 @@ struct LevelOutcome {
 }
 
 impl Level {
-    /// The levels of `image`, finest first: at most `options.levels`, each side at least
-    /// [`MIN_LEVEL_SIDE`] (the picture itself is always a level). Refused with
-    /// [`SolveError::NoImageEdges`] when the picture has no edges.
-    fn pyramid(
-        image: &Luma,
-        k: &Intrinsics,
-        options: &AlignOptions,
-    ) -> Result<Vec<Level>, SolveError> {
-        let mut levels = Vec::with_capacity(options.levels);
-        let mut current = Some(image.clone());
-        let mut scale = 1.0;
-        while let Some(picture) = current.take() {
-            let edges = EdgeMap::detect(&picture, &options.edges)?;
-            if levels.is_empty() && edges.edgels().is_empty() {
-                return Err(SolveError::NoImageEdges);
-            }
-            levels.push(Level {
-                scale,
-                fx: k.fx * scale,
-                fy: k.fy * scale,
-                cx: k.cx * scale,
-                cy: k.cy * scale,
-                edges,
-            });
-            if levels.len() < options.levels
-                && picture.width() / 2 >= MIN_LEVEL_SIDE
-                && picture.height() / 2 >= MIN_LEVEL_SIDE
-            {
-                current = picture.half();
-                scale *= 0.5;
-            }
-        }
-        Ok(levels)
-    }
-
-    /// The matcher of this level; `tracking` on the finest of several levels, which
-    /// matches only nearby edges ([`AlignOptions::match_px`]).
-    fn matcher(&self, options: &AlignOptions, tracking: bool) -> Matcher<'_> {
+    /// The matcher of this level for a camera of intrinsics `k`; `tracking` on the
+    /// finest of several levels, which matches only nearby edges
+    /// ([`AlignOptions::match_px`]).
+    fn matcher(&self, k: &Intrinsics, options: &AlignOptions, tracking: bool) -> Matcher<'_> {
         Matcher {
-            level: self,
+            edges: &self.edges,
+            scale: self.scale,
+            fx: k.fx * self.scale,
+            fy: k.fy * self.scale,
+            cx: k.cx * self.scale,
+            cy: k.cy * self.scale,
             loss: options.loss,
             max_match: if tracking {
                 options.match_px
@@ -509,29 +610,25 @@ impl Level {
 
     /// Levenberg–Marquardt on this level from `start`, the matches found again after
     /// every kept step (see the module documentation).
-    fn refine(
+    fn refine<D: Drawing>(
         &self,
-        scene: &Scene,
-        edge_faces: &EdgeFaces,
+        drawing: &D,
         k: &Intrinsics,
         start: PoseEstimate,
         options: &AlignOptions,
         tracking: bool,
     ) -> Result<LevelOutcome, SolveError> {
-        let matcher = self.matcher(options, tracking);
-        let drawing = Drawing {
-            scene,
-            edge_faces,
-            k: *k,
-            options,
-            spacing_px: options.sample_spacing_px / self.scale,
-        };
-        let samples = drawing.samples(&start)?;
+        let matcher = self.matcher(k, options, tracking);
+        let spacing_px = options.sample_spacing_px / self.scale;
+        let samples = drawing.samples(&start, spacing_px)?;
         let matches = matcher.associate(&samples, start);
-        let current = matcher.fit(&matches, start, true);
+        let current = fit_with_prior(&matcher, drawing, &matches, start, true);
         let mut alignment = LevelAlignment {
             matcher,
             drawing,
+            spacing_px,
+            visibility_every: options.visibility_every,
+            tolerance_px: options.tolerance_px,
             pose: start,
             samples,
             matches,
@@ -553,27 +650,68 @@ impl Level {
     }
 }
 
-/// What drawing the model's visible edges needs: the scene, the camera's intrinsics and the
-/// sample spacing of a level.
-struct Drawing<'a> {
-    scene: &'a Scene,
-    edge_faces: &'a EdgeFaces,
-    k: Intrinsics,
-    options: &'a AlignOptions,
-    /// Pixels of the picture.
-    spacing_px: f64,
+/// What an alignment moves and draws: for a pose (OpenCV's world-to-camera rotation and
+/// translation of the points sampled), the points on the visible edges it shows.
+trait Drawing {
+    /// The intrinsics of the camera the picture was taken with.
+    fn intrinsics(&self) -> Intrinsics;
+
+    /// Points every `spacing_px` pixels of the picture along the visible edges at `pose`,
+    /// in the frame that `pose` maps to the camera.
+    fn samples(&self, pose: &PoseEstimate, spacing_px: f64) -> Result<Vec<Sample>, SolveError>;
+
+    /// A prior on the pose, added to the cost of the matches. `None` (the default) for
+    /// no prior.
+    fn prior(&self) -> Option<PlanePrior> {
+        None
+    }
 }
 
-impl Drawing<'_> {
-    /// The samples on the model's edges visible from `pose`.
-    fn samples(&self, pose: &PoseEstimate) -> Result<Vec<Sample>, SolveError> {
+/// A prior that holds a point `X` near a plane of the camera's frame: its residual is
+/// `(normal·(R·X + t) − offset)/deviation` (`normal` a unit vector, `deviation` meters),
+/// counted as a residual of that many pixels is, without the robust loss.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct PlanePrior {
+    point: DVec3,
+    normal: DVec3,
+    offset: f64,
+    deviation: f64,
+}
+
+impl PlanePrior {
+    /// Adds the prior's cost at `pose` to `fit` (and its normal equations when asked).
+    fn add_to(&self, fit: &mut Fit, pose: PoseEstimate, with_normal_equations: bool) {
+        let a = DMat3::from_quat(pose.rotation) * self.point;
+        let residual = (self.normal.dot(a + pose.translation) - self.offset) / self.deviation;
+        fit.cost += 0.5 * residual * residual;
+        if with_normal_equations {
+            fit.equations
+                .add(a, self.normal / self.deviation, residual, 1.0);
+        }
+    }
+}
+
+/// The whole scene, seen by a camera at the pose: camera alignment.
+struct SceneDrawing<'a> {
+    scene: &'a Scene,
+    edge_faces: EdgeFaces,
+    k: Intrinsics,
+    options: &'a AlignOptions,
+}
+
+impl Drawing for SceneDrawing<'_> {
+    fn intrinsics(&self) -> Intrinsics {
+        self.k
+    }
+
+    fn samples(&self, pose: &PoseEstimate, spacing_px: f64) -> Result<Vec<Sample>, SolveError> {
         let camera = camera_at(pose, self.k)?;
         Ok(sample_edges(
             self.scene,
-            self.edge_faces,
+            &self.edge_faces,
             &camera,
             self.options,
-            self.spacing_px,
+            spacing_px,
         ))
     }
 }
@@ -582,9 +720,13 @@ impl Drawing<'_> {
 /// matches at the current pose and the cost of those matches. A step is judged by the cost
 /// of the matches it was computed from; once kept, the samples are matched anew at the new
 /// pose, and every [`AlignOptions::visibility_every`] iterations drawn anew.
-struct LevelAlignment<'a> {
+struct LevelAlignment<'a, D> {
     matcher: Matcher<'a>,
-    drawing: Drawing<'a>,
+    drawing: &'a D,
+    /// Sample spacing, pixels of the picture.
+    spacing_px: f64,
+    visibility_every: usize,
+    tolerance_px: f64,
     pose: PoseEstimate,
     samples: Vec<Sample>,
     matches: Vec<Match>,
@@ -595,7 +737,7 @@ struct LevelAlignment<'a> {
     tried: PoseEstimate,
 }
 
-impl PoseProblem for LevelAlignment<'_> {
+impl<D: Drawing> PoseProblem for LevelAlignment<'_, D> {
     type Error = SolveError;
 
     fn cost(&self) -> f64 {
@@ -609,10 +751,11 @@ impl PoseProblem for LevelAlignment<'_> {
     /// Draws the samples anew when [`AlignOptions::visibility_every`] iterations have run
     /// since they were drawn; stalls with fewer than [`MIN_MATCHED`] matches.
     fn prepare(&mut self) -> Result<Readiness, SolveError> {
-        if self.since_drawn == self.drawing.options.visibility_every {
-            self.samples = self.drawing.samples(&self.pose)?;
+        if self.since_drawn == self.visibility_every {
+            self.samples = self.drawing.samples(&self.pose, self.spacing_px)?;
             self.matches = self.matcher.associate(&self.samples, self.pose);
-            self.current = self.matcher.fit(&self.matches, self.pose, true);
+            self.current =
+                fit_with_prior(&self.matcher, self.drawing, &self.matches, self.pose, true);
             self.since_drawn = 0;
         }
         if self.matches.len() < MIN_MATCHED {
@@ -625,27 +768,55 @@ impl PoseProblem for LevelAlignment<'_> {
     /// No matched sample's projection moves by more than [`AlignOptions::tolerance_px`].
     fn negligible(&self, step: &PoseStep) -> bool {
         let next = self.pose.stepped(step);
-        self.matcher.largest_motion(&self.matches, self.pose, next)
-            <= self.drawing.options.tolerance_px
+        self.matcher.largest_motion(&self.matches, self.pose, next) <= self.tolerance_px
     }
 
     /// The cost of the current matches at the stepped pose.
     fn try_step(&mut self, step: &PoseStep) -> f64 {
         self.tried = self.pose.stepped(step);
-        self.matcher.fit(&self.matches, self.tried, false).cost
+        fit_with_prior(
+            &self.matcher,
+            self.drawing,
+            &self.matches,
+            self.tried,
+            false,
+        )
+        .cost
     }
 
     /// Moves to the pose tried and matches the samples anew there.
     fn accept(&mut self) {
         self.pose = self.tried;
         self.matches = self.matcher.associate(&self.samples, self.pose);
-        self.current = self.matcher.fit(&self.matches, self.pose, true);
+        self.current = fit_with_prior(&self.matcher, self.drawing, &self.matches, self.pose, true);
     }
+}
+
+/// The cost of `matches` at `pose` with the drawing's prior, if it has one.
+fn fit_with_prior<D: Drawing>(
+    matcher: &Matcher<'_>,
+    drawing: &D,
+    matches: &[Match],
+    pose: PoseEstimate,
+    with_normal_equations: bool,
+) -> Fit {
+    let mut fit = matcher.fit(matches, pose, with_normal_equations);
+    if let Some(prior) = drawing.prior() {
+        prior.add_to(&mut fit, pose, with_normal_equations);
+    }
+    fit
 }
 
 /// Matches samples to one level's edges, and sums the cost of matches.
 struct Matcher<'a> {
-    level: &'a Level,
+    edges: &'a EdgeMap,
+    /// Level pixels per picture pixel.
+    scale: f64,
+    /// The intrinsics at the level's scale.
+    fx: f64,
+    fy: f64,
+    cx: f64,
+    cy: f64,
     loss: Loss,
     /// Level pixels.
     max_match: f64,
@@ -681,18 +852,13 @@ impl Matcher<'_> {
     /// The level pixel of camera coordinates `p` (`p.z > 0`).
     #[inline]
     fn pixel(&self, p: DVec3) -> DVec2 {
-        let level = self.level;
-        DVec2::new(
-            level.cx + level.fx * p.x / p.z,
-            level.cy + level.fy * p.y / p.z,
-        )
+        DVec2::new(self.cx + self.fx * p.x / p.z, self.cy + self.fy * p.y / p.z)
     }
 
     /// The samples at `pose` that have an image edge near enough and running the same
     /// way, each with that edge.
     fn associate(&self, samples: &[Sample], pose: PoseEstimate) -> Vec<Match> {
         let rotation = DMat3::from_quat(pose.rotation);
-        let level = self.level;
         let mut matches = Vec::with_capacity(samples.len());
         for sample in samples {
             let p = rotation * sample.point + pose.translation;
@@ -700,7 +866,7 @@ impl Matcher<'_> {
                 continue;
             }
             let pixel = self.pixel(p);
-            let Some(edgel) = level.edges.nearest(pixel.x, pixel.y) else {
+            let Some(edgel) = self.edges.nearest(pixel.x, pixel.y) else {
                 continue;
             };
             let edge = edgel.position.as_dvec2();
@@ -712,8 +878,8 @@ impl Matcher<'_> {
             let d = rotation * sample.direction;
             let (x, y) = (p.x / p.z, p.y / p.z);
             let along = DVec2::new(
-                level.fx * (d.x - x * d.z) / p.z,
-                level.fy * (d.y - y * d.z) / p.z,
+                self.fx * (d.x - x * d.z) / p.z,
+                self.fy * (d.y - y * d.z) / p.z,
             );
             let normal = edgel.normal.as_dvec2();
             let length = along.length();
@@ -755,7 +921,6 @@ impl Matcher<'_> {
     /// The cost of `matches` at `pose`.
     fn fit(&self, matches: &[Match], pose: PoseEstimate, with_normal_equations: bool) -> Fit {
         let rotation = DMat3::from_quat(pose.rotation);
-        let level = self.level;
         let behind = 0.5 * self.loss.eval(self.max_match * self.max_match).0;
         let mut fit = Fit {
             cost: 0.0,
@@ -776,12 +941,12 @@ impl Matcher<'_> {
             fit.cost += 0.5 * rho;
             if residual.abs() <= self.inlier {
                 fit.inliers += 1;
-                fit.inlier_squares += s / (level.scale * level.scale);
+                fit.inlier_squares += s / (self.scale * self.scale);
             }
             if with_normal_equations {
                 // ∂r/∂p, with a = R·X.
                 let inv_z = 1.0 / p.z;
-                let (nx, ny) = (m.normal.x * level.fx, m.normal.y * level.fy);
+                let (nx, ny) = (m.normal.x * self.fx, m.normal.y * self.fy);
                 let row = DVec3::new(
                     nx * inv_z,
                     ny * inv_z,
@@ -794,5 +959,8 @@ impl Matcher<'_> {
     }
 }
 
+mod body;
 #[cfg(test)]
 mod tests;
+
+pub use body::{AlignedBody, HEIGHT_DEVIATION_M, Motion, align_body};
