@@ -54,7 +54,7 @@ use crate::vision::image::Luma;
 use crate::vision::recognize::{
     BodyReport, DepthImage, RecognizeError, RecognizeOptions, SearchBounds, recognize,
 };
-use crate::vision::solve::align::{AlignOptions, EdgePyramid, align_camera};
+use crate::vision::solve::align::{EdgePyramid, align_camera};
 
 /// The depth scale when none is given: millimetres, as most RGB-D cameras give them.
 const DEFAULT_DEPTH_SCALE: f64 = 0.001;
@@ -374,18 +374,17 @@ fn run(
         }
         None => None,
     };
-    let align = AlignOptions::default();
-    let pyramid = EdgePyramid::of(&luma, &align).map_err(solve_problem)?;
+    let options = RecognizeOptions {
+        search: asked.search,
+        ..RecognizeOptions::default()
+    };
+    let pyramid = EdgePyramid::of(&luma, &options.refine).map_err(solve_problem)?;
     let camera = if asked.refine_camera {
-        align_camera(scene, &start, &pyramid, &align)
+        align_camera(scene, &start, &pyramid, &options.refine)
             .map_err(solve_problem)?
             .camera
     } else {
         start
-    };
-    let options = RecognizeOptions {
-        search: asked.search,
-        ..RecognizeOptions::default()
     };
     let found = recognize(scene, &camera, &luma, &pyramid, depth.as_ref(), &options)
         .map_err(recognize_problem)?;

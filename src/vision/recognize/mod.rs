@@ -13,7 +13,10 @@
 //!
 //! 1. **Prediction.** From the camera, every body with a visible projected area is *in
 //!    view*. Its visible edge pieces are sampled every
-//!    [`Matching::spacing_px`](evidence::Matching) pixels.
+//!    [`Matching::spacing_px`](evidence::Matching) pixels, leaving out smooth edges
+//!    (between two faces seen from in front and within [`RecognizeOptions::smooth_deg`]
+//!    of each other, as the sides of a many-sided cylinder), which a picture shows
+//!    faintly if at all.
 //! 2. **Evidence where the model has it.** A sample is *supported* when an image edge
 //!    lies within [`Matching::tolerance_px`](evidence::Matching) and runs within the
 //!    largest angle of the predicted edge. The body's edge support is the fraction of its
@@ -74,6 +77,8 @@ pub mod visible;
 use std::collections::HashMap;
 
 use crate::camera::{Camera, DEFAULT_NEAR, View};
+use glam::DVec3;
+
 use crate::model::BodyId;
 use crate::render::Scene;
 use crate::render::hidden::{Segment, hidden_lines};
@@ -98,12 +103,19 @@ pub struct RecognizeOptions {
     /// The evidence (edge support, or its mean with depth agreement) from which a body is
     /// seen (or moved), in (0, 1].
     pub seen_evidence: f64,
+    /// Edges between two faces seen from in front whose normals are within this many
+    /// degrees are smooth: not expected to show, so not counted as evidence.
+    pub smooth_deg: f64,
     /// Edge samples below which a body's score is shrunk toward ½.
     pub min_points: usize,
     /// Where to look for bodies that moved; `None` does not look.
     pub search: Option<SearchBounds>,
     /// How a body's pose is aligned once the search has found it.
     pub align: AlignOptions,
+    /// How the camera is aligned with the picture when asked to be (before recognizing):
+    /// the model may be partly wrong (bodies moved or gone), so fewer of its edges need
+    /// to lie on the picture's than when the model is trusted.
+    pub refine: AlignOptions,
     /// How near a depth reading must be to the prediction to agree.
     pub depth_tolerance: DepthTolerance,
     /// Gaps in outlines of unexplained edges up to about twice this are bridged, pixels.
@@ -124,7 +136,10 @@ pub struct RecognizeOptions {
 
 impl Default for RecognizeOptions {
     /// Matches within 2 pixels and 30°, samples every 2 pixels, seen from an evidence of
-    /// ½, scores shrunk below 12 samples, a search within 10 cm and 10°, depth within
+    /// ½, edges between faces within 20° smooth, bodies aligned on two levels from samples
+    /// every pixel (steps down to 0.05 pixel, 40 iterations a level, the last pose taken
+    /// if 30 % of its samples lie on edges: the evidence decides), smooth edges left out of
+    /// every alignment, the camera aligned when 40 % of the model's edges lie on the picture's, scores shrunk below 12 samples, a search within 10 cm and 10°, depth within
     /// 1 cm + 1 %, gaps of about 6 pixels bridged, pixels departing from their class by
     /// 4 deviations and 16 grey levels, regions from 64 pixels², outlines
     /// within ¾ pixel, the renderer's near plane.
@@ -136,11 +151,23 @@ impl Default for RecognizeOptions {
                 spacing_px: 2.0,
             },
             seen_evidence: 0.5,
+            smooth_deg: 20.0,
             min_points: 12,
             search: Some(SearchBounds::default()),
             align: AlignOptions {
+                levels: 2,
                 sample_spacing_px: 1.0,
                 min_samples: 12,
+                tolerance_px: 0.05,
+                max_iterations: 40,
+                min_inlier_fraction: 0.3,
+                converged_only: false,
+                smooth_deg: 20.0,
+                ..AlignOptions::default()
+            },
+            refine: AlignOptions {
+                min_inlier_fraction: 0.4,
+                smooth_deg: 20.0,
                 ..AlignOptions::default()
             },
             depth_tolerance: DepthTolerance {
@@ -261,6 +288,9 @@ impl RecognizeOptions {
         if !(m.spacing_px.is_finite() && m.spacing_px >= 0.25) {
             return bad("the sample spacing", m.spacing_px);
         }
+        if !(0.0..90.0).contains(&self.smooth_deg) {
+            return bad("the angle of smooth edges", self.smooth_deg);
+        }
         if !(self.seen_evidence > 0.0 && self.seen_evidence <= 1.0) {
             return bad("the evidence to be seen", self.seen_evidence);
         }
@@ -340,10 +370,30 @@ fn depth_counts(
     counts
 }
 
-/// The visible pieces of each body of `scene` (by index), from one drawing.
-fn pieces_by_body(scene: &Scene, segments: &[Segment]) -> Vec<Vec<Segment>> {
+/// The visible pieces of each body of `scene` (by index), from one drawing seen from
+/// `eye`, without the pieces of smooth edges: edges between two faces turned toward the
+/// eye whose normals are within the angle of cosine `smooth_cos` (the sides of a
+/// many-sided cylinder). Their two faces are lit almost alike, so a picture shows them
+/// faintly or not at all, and their absence says nothing.
+fn pieces_by_body(
+    scene: &Scene,
+    segments: &[Segment],
+    eye: DVec3,
+    smooth_cos: f64,
+) -> Vec<Vec<Segment>> {
+    let faces: HashMap<(u64, u64), [u32; 2]> = scene
+        .edges
+        .iter()
+        .map(|e| ((scene.bodies[e.body as usize].id.get(), e.serial), e.faces))
+        .collect();
+    let smooth = |s: &Segment| {
+        faces.get(&(s.body.get(), s.edge)).is_some_and(|&[f, g]| {
+            let (f, g) = (&scene.faces[f as usize], &scene.faces[g as usize]);
+            f.faces_toward(eye) && g.faces_toward(eye) && f.normal.dot(g.normal) > smooth_cos
+        })
+    };
     let mut by_body = vec![Vec::new(); scene.bodies.len()];
-    for s in segments {
+    for s in segments.iter().filter(|s| !smooth(s)) {
         if let Ok(b) = scene.bodies.binary_search_by_key(&s.body, |b| b.id) {
             by_body[b].push(*s);
         }
@@ -434,7 +484,9 @@ pub fn recognize(
 
     // 1–2. The prediction where the model has every body, and its evidence.
     let areas = projected_areas(scene, &view);
-    let pieces = pieces_by_body(scene, &hidden_lines(scene, &view));
+    let eye = camera.position();
+    let smooth_cos = options.smooth_deg.to_radians().cos();
+    let pieces = pieces_by_body(scene, &hidden_lines(scene, &view), eye, smooth_cos);
     let frame = depth.map(|_| rasterize(scene, &view));
     let counts = match (depth, &frame) {
         (Some(d), Some(f)) => depth_counts(scene, f, d, &options.depth_tolerance),
@@ -487,7 +539,7 @@ pub fn recognize(
             };
             // The evidence where the search put it.
             let moved = scene.with_body_moved(b, &scene.body_points(b), &found.motion);
-            let drawn = pieces_by_body(&moved, &hidden_lines(&moved, &view));
+            let drawn = pieces_by_body(&moved, &hidden_lines(&moved, &view), eye, smooth_cos);
             let points = edge_points(&drawn[b], matching.spacing_px);
             let edge_support = matching.support(edges, &points).unwrap_or(0.0);
             let depth_agreement = match depth {
@@ -552,12 +604,11 @@ pub fn recognize(
             opened(&nearer, 1)
         }
         None => {
+            // The edge pixels (as `explained` marks them: by the pixel, not by the
+            // sub-pixel position) that nothing explains.
             let mut loose = Flags::new(w, h);
-            for e in edges.edgels() {
-                let (x, y) = (e.position.x.floor() as usize, e.position.y.floor() as usize);
-                if x < w && y < h && !explained[y * w + x] {
-                    loose.bits[y * w + x] = true;
-                }
+            for (i, bit) in loose.bits.iter_mut().enumerate() {
+                *bit = !explained[i] && edges.edgel_at((i % w) as u32, (i / w) as u32).is_some();
             }
             let classes = shade_classes(&updated, &view);
             let unlike = deviant(

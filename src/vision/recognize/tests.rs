@@ -103,3 +103,27 @@ fn a_block_hidden_by_something_unmodeled_is_occluded_not_absent() {
         }
     }
 }
+
+#[test]
+fn a_picture_of_the_model_as_it_is_shows_every_body_and_nothing_else() {
+    let model = demo_world().expect("the demo");
+    let scene = Scene::build(&model);
+    let camera = camera();
+    let options = Options {
+        background: SHADED_BACKGROUND,
+        ..Options::default()
+    };
+    let Ok(Picture::Rgb(rgb)) = render(&scene, &camera, Mode::Shaded, &options) else {
+        panic!("a shaded picture is RGB");
+    };
+    let image = Luma::from_samples(rgb.width, rgb.height, 3, &rgb.data).expect("a picture");
+    let options = RecognizeOptions::default();
+    let pyramid = EdgePyramid::new(&image, &options.align).expect("edges");
+    let found = recognize(&scene, &camera, &image, &pyramid, None, &options).expect("recognized");
+    assert!(!found.bodies.is_empty());
+    for r in &found.bodies {
+        assert_eq!(r.status, Status::Seen, "{r:?}");
+    }
+    assert!(found.unexplained.is_empty(), "{:?}", found.unexplained);
+    assert_eq!(found.unexplained_mask.count(), 0);
+}

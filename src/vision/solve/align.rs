@@ -137,6 +137,15 @@ pub struct AlignOptions {
     /// merge into one image edge, and where that edge is found depends on how the sliver
     /// was rendered or blurred. In [0, 1); 0 samples every visible edge.
     pub grazing_cosine: f64,
+    /// Answer only a pose at which the finest level converged. A caller that judges the
+    /// pose by evidence of its own may take the last pose of an iteration that ran out of
+    /// iterations cycling between the jumps of the nearest edges; it is still held to the
+    /// inlier fraction.
+    pub converged_only: bool,
+    /// Edges between two faces seen from in front whose normals are within this many
+    /// degrees (the sides of a many-sided cylinder) are not sampled: their faces are lit
+    /// almost alike and a picture may not show them. In [0, 90); 0 samples them all.
+    pub smooth_deg: f64,
     /// The near plane of the hidden-line drawing, meters; finite and positive.
     pub near: f64,
     /// How image edges are detected.
@@ -169,6 +178,8 @@ impl Default for AlignOptions {
             min_inlier_fraction: 0.6,
             min_samples: 30,
             grazing_cosine: 0.05,
+            converged_only: true,
+            smooth_deg: 0.0,
             near: DEFAULT_NEAR,
             edges: EdgeOptions::default(),
         }
@@ -205,6 +216,9 @@ impl AlignOptions {
         if !(self.max_angle_deg > 0.0 && self.max_angle_deg <= 90.0) {
             return bad("max_angle_deg", self.max_angle_deg);
         }
+        if !(0.0..90.0).contains(&self.smooth_deg) {
+            return bad("smooth_deg", self.smooth_deg);
+        }
         if !(0.0..1.0).contains(&self.grazing_cosine) {
             return bad("grazing_cosine", self.grazing_cosine);
         }
@@ -233,7 +247,8 @@ pub struct Aligned {
     /// [`AlignOptions::inlier_px`] of a matched image edge).
     pub inlier_fraction: f64,
     /// Whether the finest level met its convergence test: always true in a returned
-    /// value (otherwise [`SolveError::DidNotConverge`] is returned instead).
+    /// value with [`AlignOptions::converged_only`] (otherwise
+    /// [`SolveError::DidNotConverge`] is returned instead).
     pub converged: bool,
 }
 
@@ -308,7 +323,7 @@ pub fn align_camera(
         rms_px: found.rms_px,
         samples: found.samples,
         inlier_fraction: found.inlier_fraction,
-        converged: true,
+        converged: found.converged,
     })
 }
 
@@ -316,6 +331,7 @@ pub fn align_camera(
 /// level and how well its samples lie on the picture's edges.
 struct Found {
     pose: PoseEstimate,
+    converged: bool,
     iterations: usize,
     rms_px: f64,
     samples: usize,
@@ -354,6 +370,24 @@ impl EdgeFaces {
                 })
                 .collect(),
         )
+    }
+
+    /// Whether the edge named by `piece` is smooth: its two faces are both seen from in
+    /// front by an eye at `eye` and their normals are within `degrees` of each other
+    /// (never, for `degrees` 0).
+    fn smooth(&self, scene: &Scene, piece: &Segment, eye: DVec3, degrees: f64) -> bool {
+        if degrees <= 0.0 {
+            return false;
+        }
+        let Some(&[f, g]) = self.0.get(&(piece.body.get(), piece.edge)) else {
+            return false;
+        };
+        let (Some(f), Some(g)) = (scene.faces.get(f as usize), scene.faces.get(g as usize)) else {
+            return false;
+        };
+        f.faces_toward(eye)
+            && g.faces_toward(eye)
+            && f.normal.dot(g.normal) > degrees.to_radians().cos()
     }
 
     /// Whether the edge named by `piece` borders a face seen from in front, at `point`
@@ -417,7 +451,9 @@ fn sample_pieces(
         let a = camera.camera_to_world(view.unproject(piece.a, da));
         let b = camera.camera_to_world(view.unproject(piece.b, db));
         let middle = a.lerp(b, 0.5);
-        if edge_faces.grazes(scene, &piece, middle, eye, options.grazing_cosine) {
+        if edge_faces.grazes(scene, &piece, middle, eye, options.grazing_cosine)
+            || edge_faces.smooth(scene, &piece, eye, options.smooth_deg)
+        {
             continue;
         }
         let Some(direction) = (b - a).try_normalize() else {
@@ -510,8 +546,9 @@ impl EdgePyramid {
         (edges.width(), edges.height())
     }
 
-    /// Aligns `drawing` from `start`, coarsest level first, and judges the pose it ends
-    /// at (see the module documentation). Errors as [`align_to_image`] gives them.
+    /// Aligns `drawing` from `start` on the finest `options.levels` levels, coarsest
+    /// first, and judges the pose it ends at (see the module documentation). Errors as
+    /// [`align_to_image`] gives them.
     fn align<D: Drawing>(
         &self,
         drawing: &D,
@@ -530,14 +567,16 @@ impl EdgePyramid {
         let mut pose = start;
         let mut iterations = 0;
         let mut converged = false;
-        for (i, level) in self.levels.iter().enumerate().rev() {
-            let tracking = i == 0 && self.levels.len() > 1;
+        // The finest `options.levels` of the pyramid's levels.
+        let levels = &self.levels[..options.levels.min(self.levels.len())];
+        for (i, level) in levels.iter().enumerate().rev() {
+            let tracking = i == 0 && levels.len() > 1;
             let outcome = level.refine(drawing, &k, pose, options, tracking)?;
             pose = outcome.pose;
             iterations += outcome.iterations;
             converged = outcome.converged;
         }
-        if !converged {
+        if !converged && options.converged_only {
             return Err(SolveError::DidNotConverge { iterations });
         }
         let samples = drawing.samples(&pose, spacing)?;
@@ -547,7 +586,7 @@ impl EdgePyramid {
                 needed: options.min_samples,
             });
         }
-        let matcher = self.levels[0].matcher(&k, options, self.levels.len() > 1);
+        let matcher = self.levels[0].matcher(&k, options, levels.len() > 1);
         let fit = matcher.fit(&matcher.associate(&samples, pose), pose, false);
         let inlier_fraction = fit.inliers as f64 / samples.len() as f64;
         if inlier_fraction < options.min_inlier_fraction {
@@ -558,6 +597,7 @@ impl EdgePyramid {
         }
         Ok(Found {
             pose,
+            converged,
             iterations,
             rms_px: if fit.inliers == 0 {
                 0.0
