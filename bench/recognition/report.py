@@ -174,10 +174,12 @@ def main():
         ms = np.array(s["ms"])
         print(
             f"| {name} | {s['runs']} | {div(s['tp'], s['tp'] + s['fp']):.3f} | "
-            f"{div(s['tp'], s['tp'] + s['fn']):.3f} | {div(s['low_found'], s['low_there']):.3f} | "
+            f"{div(s['tp'], s['tp'] + s['fn']):.3f} ({s['tp']}/{s['tp'] + s['fn']}) | "
+            f"{div(s['low_found'], s['low_there']):.3f} ({s['low_found']}/{s['low_there']}) | "
             f"{div(s['moved_ok'], s['moved']):.3f} ({s['moved_ok']}/{s['moved']}) | "
-            f"{div(s['removed_absent'], s['removed']):.3f} | "
-            f"{div(s['there_absent'], s['there']):.4f} | {div(s['inter'], s['union']):.3f} | "
+            f"{div(s['removed_absent'], s['removed']):.3f} ({s['removed_absent']}/{s['removed']}) | "
+            f"{div(s['there_absent'], s['there']):.4f} ({s['there_absent']}/{s['there']}) | "
+            f"{div(s['inter'], s['union']):.3f} | "
             f"{float(np.mean(vf <= 0.02)):.3f} (median {float(np.median(vf)):.4f}) | "
             f"{np.median(ms):.0f} / {np.percentile(ms, 90):.0f} | {s['errors']} |"
         )
