@@ -145,10 +145,12 @@ fn every_guarded_route_refuses_missing_and_too_weak_tokens() {
         } else if method == "GET"
             || template == "/v1/appearance"
             || template == "/v1/camera-solution"
+            || template == "/v1/recognition"
             || template.starts_with("/v1/spatial/")
         {
-            // POST /v1/appearance draws, POST /v1/spatial/* query and POST
-            // /v1/camera-solution solves (storing needs write, checked below); they
+            // POST /v1/appearance draws, POST /v1/spatial/* query, POST
+            // /v1/camera-solution solves (storing needs write, checked below) and POST
+            // /v1/recognition recognizes (updating needs write, checked below); they
             // change nothing and need only the read role.
             "read"
         } else {
@@ -262,7 +264,7 @@ fn each_role_does_what_it_may() {
 }
 
 #[test]
-fn a_read_token_solves_cameras_but_only_a_write_token_stores_them() {
+fn a_read_token_solves_and_recognizes_but_only_a_write_token_stores_or_updates() {
     use winged::model::{Camera, Intrinsics};
     let s = server();
     let agent = s.agent();
@@ -314,4 +316,44 @@ fn a_read_token_solves_cameras_but_only_a_write_token_stores_them() {
     let (status, text) = solve(WRITE, true);
     assert_eq!(status, 200, "{text}");
     assert_eq!(revision(&s), before + 1);
+    // Recognition reads; "update" writes, and needs the write role.
+    let blank = {
+        use base64::Engine as _;
+        let mut png = Vec::new();
+        let mut encoder = png::Encoder::new(&mut png, 640, 480);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder
+            .write_header()
+            .expect("a header")
+            .write_image_data(&vec![90u8; 640 * 480])
+            .expect("pixels");
+        base64::engine::general_purpose::STANDARD.encode(png)
+    };
+    let camera = json!({
+        "pose": {"position": eye.pose.position.to_array(), "rotation": eye.pose.rotation.to_array()},
+        "intrinsics": {"width": 640, "height": 480, "fx": 500.0, "fy": 500.0, "cx": 320.0, "cy": 240.0},
+    });
+    let recognize = |token: &str, update: bool| {
+        let mut res = agent
+            .post(&s.url("/v1/recognition"))
+            .header("Authorization", format!("Bearer {token}"))
+            .send_json(json!({"camera": camera, "image": blank, "update": update}))
+            .expect("the server answers");
+        let status = res.status().as_u16();
+        let text = res.body_mut().read_to_string().unwrap_or_default();
+        (status, text)
+    };
+    let before = revision(&s);
+    let (status, text) = recognize(READ, false);
+    assert_eq!(status, 200, "{text}");
+    let (status, text) = recognize(READ, true);
+    assert_eq!(status, 403, "{text}");
+    assert!(text.contains("write"), "{text}");
+    let (status, text) = recognize(WRITE, true);
+    assert_eq!(status, 200, "{text}");
+    assert_eq!(
+        revision(&s),
+        before,
+        "nothing moved, so nothing was written"
+    );
 }

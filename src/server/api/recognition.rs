@@ -110,10 +110,13 @@ pub struct RecognitionQuery {
     /// A stored camera's name (the raw form needs it).
     #[serde(default)]
     pub camera: Option<String>,
+    /// Align the camera with the picture first.
     #[serde(default)]
     pub refine_camera: bool,
+    /// Answer the unexplained regions as a PNG mask too.
     #[serde(default)]
     pub unexplained_mask: bool,
+    /// Apply the moved bodies' corrected poses (the write role).
     #[serde(default)]
     pub update: bool,
 }

@@ -16,6 +16,7 @@ pub struct DepthImage {
 /// Why a depth picture was refused.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum DepthError {
+    /// The samples do not fill the picture.
     #[error("a depth picture of {width}×{height} needs {expected} samples, not {got}")]
     Samples {
         width: u32,
@@ -23,6 +24,7 @@ pub enum DepthError {
         expected: usize,
         got: usize,
     },
+    /// The scale is not a positive number of meters per unit.
     #[error("the depth scale must be a positive number of meters per unit, not {0}")]
     Scale(f64),
 }
@@ -98,7 +100,9 @@ pub enum Reading {
 /// times the predicted depth (depth sensors' noise grows with distance).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DepthTolerance {
+    /// Meters.
     pub absolute_m: f64,
+    /// A fraction of the predicted depth.
     pub relative: f64,
 }
 

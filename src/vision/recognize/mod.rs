@@ -216,6 +216,7 @@ pub struct BodyReport {
     pub body: usize,
     /// The body's id.
     pub id: BodyId,
+    /// What recognition says of it.
     pub status: Status,
     /// The probability that the body is there as reported, in [0, 1] (see the module
     /// documentation).
@@ -269,8 +270,10 @@ pub enum RecognizeError {
         camera_width: u32,
         camera_height: u32,
     },
+    /// The camera is not valid.
     #[error("invalid camera: {0}")]
     Camera(String),
+    /// An option is out of range.
     #[error("{what} is out of range: {value}")]
     Option { what: &'static str, value: f64 },
 }

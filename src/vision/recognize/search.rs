@@ -50,17 +50,26 @@ const SHIFT_STEPS: f64 = 24.0;
 /// edges once aligned.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Moved {
+    /// World points `X ↦ motion·X`: from where the scene has the body to where it is.
     pub motion: Motion,
+    /// The fraction of its visible edge samples within the inlier distance of an image
+    /// edge of their direction, at the motion found.
     pub inlier_fraction: f64,
 }
 
 /// What the search for one body needs.
 pub struct Search<'a> {
+    /// The model, bodies where it has them.
     pub scene: &'a Scene,
+    /// The camera that took the picture.
     pub camera: &'a Camera,
+    /// The picture's edges.
     pub pyramid: &'a EdgePyramid,
+    /// How edge points are matched in the shift search.
     pub matching: Matching,
+    /// How far a body may have moved.
     pub bounds: SearchBounds,
+    /// How the body's pose is aligned from the best shift.
     pub align: &'a AlignOptions,
 }
 
