@@ -10,7 +10,8 @@
 //!   false}` (only `camera` and `image` required; `"search": null` does not look for
 //!   moved bodies);
 //! * the raw PNG as the body (`Content-Type: image/png`) with `?camera=NAME` and the
-//!   flags `refine_camera`, `unexplained_mask` and `update` in the query.
+//!   flags `refine_camera`, `unexplained_mask` and `update` in the query (the flags in
+//!   the query hold for the JSON form too; its `camera` names the raw form's camera only).
 //!
 //! Recognition reads a snapshot of the world on a blocking thread, at most one per core
 //! at a time (the camera solution's turns). With `update` (the write role), the moved
@@ -288,11 +289,6 @@ async fn asked(query: RecognitionQuery, req: Request) -> Result<Asked, Problem> 
         )
         .unread());
     }
-    if query.camera.is_some() || query.refine_camera || query.unexplained_mask || query.update {
-        return Err(Problem::bad_request(
-            "the query's options belong to the raw-PNG form; give them in the JSON body",
-        ));
-    }
     let req: RecognitionReq = Bodies::of(&req)?.parse(req, from_json).await?;
     let search = req.search.map(|s| s.bounds()).transpose()?;
     let depth_scale = req.depth_scale.unwrap_or(DEFAULT_DEPTH_SCALE);
@@ -309,10 +305,11 @@ async fn asked(query: RecognitionQuery, req: Request) -> Result<Asked, Problem> 
         image_base64: Some(req.image),
         depth: req.depth,
         depth_scale,
-        refine_camera: req.refine_camera,
+        // The query's flags hold for the JSON form too; its camera is the raw form's.
+        refine_camera: req.refine_camera || query.refine_camera,
         search,
-        unexplained_mask: req.unexplained_mask,
-        update: req.update,
+        unexplained_mask: req.unexplained_mask || query.unexplained_mask,
+        update: req.update || query.update,
     })
 }
 
