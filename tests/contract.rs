@@ -1569,6 +1569,16 @@ fn recognition(c: &Contract) {
         404,
         Spec::Either,
     );
+    let p = c.refused_json(
+        "POST",
+        path,
+        path,
+        json!({"camera": "eye", "image": grey(size("width"), size("height")),
+               "depth_scale": 0.0}),
+        422,
+        Spec::Either,
+    );
+    assert_eq!(p["type"], "urn:winged:problem:invalid-depth", "{p}");
 }
 
 fn camera_solution(c: &Contract) {
