@@ -210,14 +210,11 @@ enum Fate {
     Removed,
 }
 
-/// One scene: the model, the truth, the cameras and the fates.
-fn scene(rng: &mut Rng) -> Value {
-    let count = 5 + rng.below(11);
-    let distractors = rng.below(3);
-    let mut placed: Vec<(DVec2, f64)> = Vec::new();
-    let mut model = World::new();
-    let root = model.root();
-    model
+/// A world of the table alone, its top at [`TABLE_TOP`].
+fn table() -> World {
+    let mut world = World::new();
+    let root = world.root();
+    world
         .insert_with(
             Some("table"),
             root,
@@ -225,6 +222,15 @@ fn scene(rng: &mut Rng) -> Value {
             |s| box_solid(s, DVec3::new(TABLE.x, TABLE.y, 0.05)),
         )
         .expect("the table");
+    world
+}
+
+/// One scene: the model, the truth, the cameras and the fates.
+fn scene(rng: &mut Rng) -> Value {
+    let count = 5 + rng.below(11);
+    let distractors = rng.below(3);
+    let mut placed: Vec<(DVec2, f64)> = Vec::new();
+    let mut model = table();
     let mut truth_adds = Vec::new();
     let mut bodies = Vec::new();
     for i in 0..count + distractors {
@@ -260,16 +266,7 @@ fn scene(rng: &mut Rng) -> Value {
             truth_adds.push((format!("distractor{i}"), kind, at, yaw));
         }
     }
-    let mut truth = World::new();
-    let root = truth.root();
-    truth
-        .insert_with(
-            Some("table"),
-            root,
-            Pose::from_translation(DVec3::new(0.0, 0.0, TABLE_TOP - 0.025)),
-            |s| box_solid(s, DVec3::new(TABLE.x, TABLE.y, 0.05)),
-        )
-        .expect("the table");
+    let mut truth = table();
     let mut fates = vec![json!({"name": "table", "fate": "stays"})];
     for (name, kind, at, yaw, fate) in &bodies {
         match *fate {

@@ -317,18 +317,7 @@ fn a_read_token_solves_and_recognizes_but_only_a_write_token_stores_or_updates()
     assert_eq!(status, 200, "{text}");
     assert_eq!(revision(&s), before + 1);
     // Recognition reads; "update" writes, and needs the write role.
-    let blank = {
-        use base64::Engine as _;
-        let mut png = Vec::new();
-        let mut encoder = png::Encoder::new(&mut png, 640, 480);
-        encoder.set_color(png::ColorType::Grayscale);
-        encoder
-            .write_header()
-            .expect("a header")
-            .write_image_data(&vec![90u8; 640 * 480])
-            .expect("pixels");
-        base64::engine::general_purpose::STANDARD.encode(png)
-    };
+    let blank = support::blank_png_base64(640, 480);
     let camera = json!({
         "pose": {"position": eye.pose.position.to_array(), "rotation": eye.pose.rotation.to_array()},
         "intrinsics": {"width": 640, "height": 480, "fx": 500.0, "fy": 500.0, "cx": 320.0, "cy": 240.0},

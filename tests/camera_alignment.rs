@@ -11,7 +11,7 @@ use base64::Engine as _;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
-use support::{Rng, TestServer, camera_json, demo_camera};
+use support::{Rng, TestServer, camera_json, demo_camera, png_rgb};
 use winged::model::Camera;
 
 /// A camera 2 m from the blocks on the demo table, 640 × 480, f = 600.
@@ -38,20 +38,7 @@ fn noisy(png_bytes: &[u8], sigma: f64, rng: &mut Rng) -> Vec<u8> {
     for v in &mut buf[..info.buffer_size()] {
         *v = (*v as f64 + sigma * rng.normal()).round().clamp(0.0, 255.0) as u8;
     }
-    encode_rgb(info.width, info.height, &buf[..info.buffer_size()])
-}
-
-fn encode_rgb(width: u32, height: u32, rgb: &[u8]) -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut encoder = png::Encoder::new(&mut out, width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder
-        .write_header()
-        .expect("a header")
-        .write_image_data(rgb)
-        .expect("pixels");
-    out
+    png_rgb(info.width, info.height, &buf[..info.buffer_size()])
 }
 
 fn revision(s: &TestServer) -> u64 {
@@ -157,8 +144,8 @@ fn bad_pictures_get_problems_and_change_nothing() {
     let picture = s.get("/v1/cameras/truth/image").bytes;
     let good = BASE64.encode(&picture);
     let before = revision(&s);
-    let blank = BASE64.encode(encode_rgb(640, 480, &vec![128; 640 * 480 * 3]));
-    let small = BASE64.encode(encode_rgb(320, 240, &vec![128; 320 * 240 * 3]));
+    let blank = BASE64.encode(png_rgb(640, 480, &vec![128; 640 * 480 * 3]));
+    let small = BASE64.encode(png_rgb(320, 240, &vec![128; 320 * 240 * 3]));
     // Looking straight up, away from the table.
     let sky = Camera::look_at(
         DVec3::new(0.0, 0.0, 3.0),
@@ -176,7 +163,7 @@ fn bad_pictures_get_problems_and_change_nothing() {
                 rgb[3 * (y * 640 + x)..3 * (y * 640 + x) + 3].fill(v);
             }
         }
-        BASE64.encode(encode_rgb(640, 480, &rgb))
+        BASE64.encode(png_rgb(640, 480, &rgb))
     };
     let cases: Vec<(&str, Value, u16, &str)> = vec![
         (

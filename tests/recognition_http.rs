@@ -15,7 +15,7 @@ use base64::Engine as _;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
-use support::{TestServer, camera_json, demo_camera};
+use support::{TestServer, camera_json, demo_camera, png_rgb};
 use winged::model::solids::box_solid;
 use winged::model::{Camera, Pose, World};
 use winged::render::Scene;
@@ -81,19 +81,6 @@ fn stranger_pixels(truth: &World, camera: &Camera) -> Vec<bool> {
         .zip(&only.depth)
         .map(|(&d, &s)| s.is_finite() && (d - s).abs() < 1e-9)
         .collect()
-}
-
-fn png_rgb(width: u32, height: u32, rgb: &[u8]) -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut encoder = png::Encoder::new(&mut out, width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder
-        .write_header()
-        .expect("a header")
-        .write_image_data(rgb)
-        .expect("pixels");
-    out
 }
 
 fn png_depth(width: u32, height: u32, units: &[u16]) -> Vec<u8> {

@@ -282,3 +282,24 @@ pub fn demo_camera() -> winged::model::Camera {
     let k = winged::model::Intrinsics::centered(640, 480, 600.0).expect("intrinsics");
     winged::model::Camera::look_at(eye, target, glam::DVec3::Z, k).expect("a camera")
 }
+
+/// An 8-bit RGB PNG of `rgb` (row-major, three samples a pixel).
+pub fn png_rgb(width: u32, height: u32, rgb: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder
+        .write_header()
+        .expect("a header")
+        .write_image_data(rgb)
+        .expect("pixels");
+    out
+}
+
+/// A grey picture of one level, as a base64 PNG.
+pub fn blank_png_base64(width: u32, height: u32) -> String {
+    use base64::Engine as _;
+    let samples = vec![90u8; (width * height * 3) as usize];
+    base64::engine::general_purpose::STANDARD.encode(png_rgb(width, height, &samples))
+}
