@@ -11,7 +11,7 @@ use base64::Engine as _;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
-use support::{Rng, TestServer, camera_json, demo_camera, png_rgb};
+use support::{Rng, TestServer, camera_json, demo_camera, png_rgb, pose_of};
 use winged::model::Camera;
 
 /// A camera 2 m from the blocks on the demo table, 640 × 480, f = 600.
@@ -50,18 +50,7 @@ fn revision(s: &TestServer) -> u64 {
 /// The answered camera's rotation (degrees) and position (meters) errors.
 fn errors(a: &Value, truth: &Camera) -> (f64, f64) {
     let p = &a["camera"]["pose"];
-    let v = |x: &Value, k: usize| x[k].as_f64().expect("a number");
-    let position = DVec3::new(
-        v(&p["position"], 0),
-        v(&p["position"], 1),
-        v(&p["position"], 2),
-    );
-    let rotation = DQuat::from_xyzw(
-        v(&p["rotation"], 0),
-        v(&p["rotation"], 1),
-        v(&p["rotation"], 2),
-        v(&p["rotation"], 3),
-    );
+    let (position, rotation) = pose_of(p);
     (
         rotation.angle_between(truth.pose.rotation).to_degrees(),
         position.distance(truth.pose.position),

@@ -15,7 +15,7 @@ use base64::Engine as _;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
-use support::{TestServer, camera_json, demo_camera, png_rgb};
+use support::{TestServer, camera_json, demo_camera, png_rgb, pose_of};
 use winged::model::solids::box_solid;
 use winged::model::{Camera, Pose, World};
 use winged::render::Scene;
@@ -167,18 +167,7 @@ fn check_statuses(a: &Value, model: &World) {
             .expect("a pose"),
     );
     let p = &cube["pose"];
-    let v = |x: &Value, k: usize| x[k].as_f64().expect("a number");
-    let position = DVec3::new(
-        v(&p["position"], 0),
-        v(&p["position"], 1),
-        v(&p["position"], 2),
-    );
-    let rotation = DQuat::from_xyzw(
-        v(&p["rotation"], 0),
-        v(&p["rotation"], 1),
-        v(&p["rotation"], 2),
-        v(&p["rotation"], 3),
-    );
+    let (position, rotation) = pose_of(p);
     let offset = position.distance(truth.position);
     let angle = rotation.angle_between(truth.rotation).to_degrees();
     assert!(offset < 0.01 && angle < 1.0, "{offset} m, {angle}°: {cube}");

@@ -303,3 +303,22 @@ pub fn blank_png_base64(width: u32, height: u32) -> String {
     let samples = vec![90u8; (width * height * 3) as usize];
     base64::engine::general_purpose::STANDARD.encode(png_rgb(width, height, &samples))
 }
+
+/// The position and rotation of a pose as the API answers it
+/// (`{"position": [x, y, z], "rotation": [qx, qy, qz, qw]}`).
+pub fn pose_of(p: &Value) -> (glam::DVec3, glam::DQuat) {
+    let v = |x: &Value, k: usize| x[k].as_f64().expect("a number");
+    (
+        glam::DVec3::new(
+            v(&p["position"], 0),
+            v(&p["position"], 1),
+            v(&p["position"], 2),
+        ),
+        glam::DQuat::from_xyzw(
+            v(&p["rotation"], 0),
+            v(&p["rotation"], 1),
+            v(&p["rotation"], 2),
+            v(&p["rotation"], 3),
+        ),
+    )
+}

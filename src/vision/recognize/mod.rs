@@ -498,10 +498,15 @@ pub fn recognize(
     let in_view: Vec<usize> = (0..scene.bodies.len())
         .filter(|&b| areas[b].visible > 0.0)
         .collect();
+    // Each body's edge points where the model has it, sampled once.
+    let points: Vec<Vec<EdgePoint>> = pieces
+        .iter()
+        .map(|p| edge_points(p, matching.spacing_px))
+        .collect();
     let mut reports = Vec::with_capacity(in_view.len());
     for &b in &in_view {
-        let points = edge_points(&pieces[b], matching.spacing_px);
-        let edge_support = matching.support(edges, &points).unwrap_or(0.0);
+        let points = &points[b];
+        let edge_support = matching.support(edges, points).unwrap_or(0.0);
         let depth_agreement = counts.get(b).and_then(DepthCounts::agreement);
         let whole = areas[b].whole;
         reports.push(BodyReport {
@@ -536,8 +541,7 @@ pub fn recognize(
         };
         for report in reports.iter_mut().filter(|r| unconfirmed(r)) {
             let b = report.body;
-            let points = edge_points(&pieces[b], matching.spacing_px);
-            let Some(found) = search.find(b, &points) else {
+            let Some(found) = search.find(b, &points[b]) else {
                 continue;
             };
             // The evidence where the search put it.
@@ -654,7 +658,7 @@ pub fn recognize(
                 let covered = match counts.get(b).and_then(DepthCounts::covered) {
                     Some(c) => c,
                     None => {
-                        let points = edge_points(&pieces[b], matching.spacing_px);
+                        let points = &points[b];
                         let inside = points
                             .iter()
                             .filter(|p| {
