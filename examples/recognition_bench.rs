@@ -526,7 +526,7 @@ fn run_scene(dir: &Path, i: usize) -> Value {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = "usage: recognition_bench scenes DIR [--count N] [--seed S] | run DIR";
+    let usage = "usage: recognition_bench scenes DIR [--count N] [--seed S] | run DIR [--only N]";
     let (Some(command), Some(dir)) = (args.first(), args.get(1)) else {
         eprintln!("{usage}");
         std::process::exit(2);
@@ -551,14 +551,29 @@ fn main() {
             eprintln!("{count} scenes in {}", dir.display());
         }
         "run" => {
-            let mut i = 0;
+            tracing_subscriber::fmt()
+                .with_env_filter(
+                    tracing_subscriber::EnvFilter::try_from_default_env()
+                        .unwrap_or_else(|_| "warn".into()),
+                )
+                .with_writer(std::io::stderr)
+                .init();
+            // `--only N` recognizes scene N alone (its answer file is rewritten).
+            let only = args
+                .iter()
+                .position(|a| a == "--only")
+                .map(|_| flag("--only", 0) as usize);
+            let mut i = only.unwrap_or(0);
             while dir.join(format!("image_{i:03}.png")).exists() {
                 let out = run_scene(&dir, i);
                 std::fs::write(dir.join(format!("winged_{i:03}.json")), out.to_string())
                     .expect("written");
                 i += 1;
+                if only.is_some() {
+                    break;
+                }
             }
-            eprintln!("{i} scenes recognized");
+            eprintln!("scenes up to {i} recognized");
         }
         _ => {
             eprintln!("{usage}");

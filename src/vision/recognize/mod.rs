@@ -556,6 +556,12 @@ pub fn recognize(
                 }
                 None => None,
             };
+            tracing::debug!(
+                body = ?scene.bodies[b].name,
+                edge_support,
+                ?depth_agreement,
+                "evidence where the search put it"
+            );
             if evidence(edge_support, depth_agreement) >= options.seen_evidence {
                 let area = projected_areas(&moved, &view)[b];
                 report.status = Status::Moved;

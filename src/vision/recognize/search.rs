@@ -13,7 +13,7 @@
 //!    farther than [`SearchBounds::translation_m`] and turns it by no more than
 //!    [`SearchBounds::rotation_deg`].
 
-use glam::{DVec2, DVec3};
+use glam::{DQuat, DVec2, DVec3};
 
 use super::evidence::{EdgePoint, Matching};
 use crate::camera::Camera;
@@ -95,7 +95,10 @@ impl Search<'_> {
         }
         let k = self.camera.intrinsics;
         let reach = (k.fx.max(k.fy) * self.bounds.translation_m / in_camera.z).min(MAX_SHIFT_PX);
-        let shift = self.best_shift(points, reach)?;
+        let Some(shift) = self.best_shift(points, reach) else {
+            tracing::debug!(body = ?self.scene.bodies[body].name, reach, "no shift lays any edge point on the picture's");
+            return None;
+        };
         // The slide at the centre's height that shows the centre `shift` away: where the
         // ray through the shifted image of the centre meets that level (or, for a ray
         // nearly level, the translation parallel to the image at the centre's depth).
@@ -123,24 +126,53 @@ impl Search<'_> {
         } else {
             across
         };
-        let start = Pose::from_translation(slide);
-        let aligned = align_body(
-            self.scene,
-            body,
-            self.camera,
-            self.pyramid,
-            &start,
-            self.align,
-        )
-        .ok()?;
-        let moved = aligned.motion.transform_point(centre) - centre;
-        let turn = aligned.motion.angle_to(&Pose::IDENTITY);
-        (moved.length() <= self.bounds.translation_m
-            && turn <= self.bounds.rotation_deg.to_radians())
-        .then_some(Moved {
-            motion: aligned.motion,
-            inlier_fraction: aligned.inlier_fraction,
-        })
+        // Starts turned about the body's vertical axis through its centre by none, and
+        // by half the bound either way: a turn of a few degrees moves the corners of a
+        // larger body by more than the alignment's reach, and the best fit is kept.
+        let half = 0.5 * self.bounds.rotation_deg.to_radians();
+        let mut best: Option<Moved> = None;
+        for turn in [0.0, half, -half] {
+            let q = DQuat::from_rotation_z(turn);
+            let start = Pose {
+                position: slide + centre - q * centre,
+                rotation: q,
+            };
+            let aligned = match align_body(
+                self.scene,
+                body,
+                self.camera,
+                self.pyramid,
+                &start,
+                self.align,
+            ) {
+                Ok(aligned) => aligned,
+                Err(e) => {
+                    tracing::debug!(body = ?self.scene.bodies[body].name, ?shift, turn, error = %e, "the body's pose did not align");
+                    continue;
+                }
+            };
+            let moved = aligned.motion.transform_point(centre) - centre;
+            let turned = aligned.motion.angle_to(&Pose::IDENTITY);
+            let within = moved.length() <= self.bounds.translation_m
+                && turned <= self.bounds.rotation_deg.to_radians();
+            tracing::debug!(
+                body = ?self.scene.bodies[body].name,
+                ?shift,
+                start_turn_deg = turn.to_degrees(),
+                moved_m = moved.length(),
+                turn_deg = turned.to_degrees(),
+                inliers = aligned.inlier_fraction,
+                within,
+                "aligned"
+            );
+            if within && best.is_none_or(|b| aligned.inlier_fraction > b.inlier_fraction) {
+                best = Some(Moved {
+                    motion: aligned.motion,
+                    inlier_fraction: aligned.inlier_fraction,
+                });
+            }
+        }
+        best
     }
 
     /// The image offset within `reach` pixels at which most of `points` are supported,

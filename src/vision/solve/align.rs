@@ -63,7 +63,7 @@
 
 use std::collections::HashMap;
 
-use glam::{DMat3, DVec2, DVec3};
+use glam::{DMat3, DQuat, DVec2, DVec3};
 
 use super::SolveError;
 use super::lm::{
@@ -700,10 +700,31 @@ trait Drawing {
     /// in the frame that `pose` maps to the camera.
     fn samples(&self, pose: &PoseEstimate, spacing_px: f64) -> Result<Vec<Sample>, SolveError>;
 
-    /// A prior on the pose, added to the cost of the matches. `None` (the default) for
-    /// no prior.
-    fn prior(&self) -> Option<PlanePrior> {
-        None
+    /// Priors on the pose, added to the cost of the matches. None (the default) for no
+    /// prior.
+    fn priors(&self) -> Priors {
+        Priors::default()
+    }
+}
+
+/// The priors a drawing puts on the pose.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct Priors {
+    /// Holds a point near a plane.
+    plane: Option<PlanePrior>,
+    /// Holds a turn near none.
+    turn: Option<TurnPrior>,
+}
+
+impl Priors {
+    /// Adds the priors' cost at `pose` to `fit` (and their normal equations when asked).
+    fn add_to(&self, fit: &mut Fit, pose: PoseEstimate, with_normal_equations: bool) {
+        if let Some(p) = &self.plane {
+            p.add_to(fit, pose, with_normal_equations);
+        }
+        if let Some(p) = &self.turn {
+            p.add_to(fit, pose, with_normal_equations);
+        }
     }
 }
 
@@ -727,6 +748,37 @@ impl PlanePrior {
         if with_normal_equations {
             fit.equations
                 .add(a, self.normal / self.deviation, residual, 1.0);
+        }
+    }
+}
+
+/// A prior that holds the turn between a fixed rotation `R₀` (world to camera) and the
+/// pose's `R` near none: with `φ` the rotation vector of `R₀ᵀ·R` (world axes), its three
+/// residuals are `φᵢ/deviationᵢ` (radians), each counted as a residual of that many
+/// pixels is, without the robust loss. The step `R ← exp([δω]×)·R` changes `φ` by
+/// `R₀ᵀ·δω` to first order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct TurnPrior {
+    rotation: DQuat,
+    deviation: DVec3,
+}
+
+impl TurnPrior {
+    /// Adds the prior's cost at `pose` to `fit` (and its normal equations when asked).
+    fn add_to(&self, fit: &mut Fit, pose: PoseEstimate, with_normal_equations: bool) {
+        let mut turn = self.rotation.conjugate() * pose.rotation;
+        if turn.w < 0.0 {
+            turn = -turn;
+        }
+        let phi = turn.to_scaled_axis();
+        let back = DMat3::from_quat(self.rotation);
+        for i in 0..3 {
+            let residual = phi[i] / self.deviation[i];
+            fit.cost += 0.5 * residual * residual;
+            if with_normal_equations {
+                fit.equations
+                    .add_turn(back.col(i) / self.deviation[i], residual, 1.0);
+            }
         }
     }
 }
@@ -832,7 +884,7 @@ impl<D: Drawing> PoseProblem for LevelAlignment<'_, D> {
     }
 }
 
-/// The cost of `matches` at `pose` with the drawing's prior, if it has one.
+/// The cost of `matches` at `pose` with the drawing's priors.
 fn fit_with_prior<D: Drawing>(
     matcher: &Matcher<'_>,
     drawing: &D,
@@ -841,9 +893,9 @@ fn fit_with_prior<D: Drawing>(
     with_normal_equations: bool,
 ) -> Fit {
     let mut fit = matcher.fit(matches, pose, with_normal_equations);
-    if let Some(prior) = drawing.prior() {
-        prior.add_to(&mut fit, pose, with_normal_equations);
-    }
+    drawing
+        .priors()
+        .add_to(&mut fit, pose, with_normal_equations);
     fit
 }
 

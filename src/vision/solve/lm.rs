@@ -98,6 +98,16 @@ impl NormalEquations {
         self.hessian.syger(weight, &j, &j, 1.0);
         self.gradient.axpy(weight * residual, &j, 1.0);
     }
+
+    /// Adds the scalar residual `residual` of weight `weight` that depends on the
+    /// rotation alone, with derivative `d_domega` in the rotation step `δω`: its Jacobian
+    /// in the step is `(d_domega, 0)`.
+    #[inline]
+    pub(super) fn add_turn(&mut self, d_domega: DVec3, residual: f64, weight: f64) {
+        let j = Vector6::new(d_domega.x, d_domega.y, d_domega.z, 0.0, 0.0, 0.0);
+        self.hessian.syger(weight, &j, &j, 1.0);
+        self.gradient.axpy(weight * residual, &j, 1.0);
+    }
 }
 
 /// What a problem says before an iteration.

@@ -28,12 +28,18 @@
 use glam::{DMat3, DQuat, DVec3};
 
 use super::{
-    AlignOptions, Drawing, EdgeFaces, EdgePyramid, PlanePrior, PoseEstimate, Sample, SolveError,
-    camera_at, sample_pieces,
+    AlignOptions, Drawing, EdgeFaces, EdgePyramid, PlanePrior, PoseEstimate, Priors, Sample,
+    SolveError, TurnPrior, camera_at, sample_pieces,
 };
 
 /// The deviation of the prior on the height of a body's centre, meters.
 pub const HEIGHT_DEVIATION_M: f64 = 0.01;
+
+/// The deviation of the prior on the tilt of a body's vertical axis, degrees.
+pub const UPRIGHT_DEVIATION_DEG: f64 = 1.0;
+
+/// The deviation of the prior on a body's turn about the vertical, degrees.
+pub const TURN_DEVIATION_DEG: f64 = 10.0;
 use crate::camera::{Camera, Intrinsics};
 use crate::model::Pose;
 use crate::render::Scene;
@@ -85,7 +91,7 @@ pub fn align_body(
     let camera = camera.validated()?;
     pyramid.check(&camera.intrinsics, options)?;
     let mut drawing = BodyDrawing::new(scene, body, camera, options)?;
-    drawing.hold_height_at(&drawing.pose_of(&Pose::IDENTITY));
+    drawing.hold_upright_at(&drawing.pose_of(&Pose::IDENTITY));
     let start = drawing.pose_of(start);
     let found = pyramid.align(&drawing, start, options)?;
     Ok(AlignedBody {
@@ -112,8 +118,9 @@ struct BodyDrawing<'a> {
     translation: DVec3,
     edge_faces: EdgeFaces,
     options: &'a AlignOptions,
-    /// Where the prior holds the body's centre (its height at the start).
-    prior: Option<PlanePrior>,
+    /// Where the priors hold the body's centre (its height at the start) and its
+    /// vertical axis (upright as the start has it).
+    priors: Priors,
 }
 
 impl<'a> BodyDrawing<'a> {
@@ -141,12 +148,13 @@ impl<'a> BodyDrawing<'a> {
             translation,
             edge_faces: EdgeFaces::of(scene),
             options,
-            prior: None,
+            priors: Priors::default(),
         })
     }
 
-    /// Holds the body's centre, unmoved, to the height (world z) it has at `pose`.
-    fn hold_height_at(&mut self, pose: &PoseEstimate) {
+    /// Holds the body's centre, unmoved, to the height (world z) it has at `pose`, and its
+    /// vertical axis to the direction `pose` gives it.
+    fn hold_upright_at(&mut self, pose: &PoseEstimate) {
         if self.points.is_empty() {
             return;
         }
@@ -160,12 +168,22 @@ impl<'a> BodyDrawing<'a> {
         // up·(p − t), with up = R·ẑ.
         let up = self.rotation * DVec3::Z;
         let start = DMat3::from_quat(pose.rotation) * centre + pose.translation;
-        self.prior = Some(PlanePrior {
-            point: centre,
-            normal: up,
-            offset: up.dot(start),
-            deviation: HEIGHT_DEVIATION_M,
-        });
+        self.priors = Priors {
+            plane: Some(PlanePrior {
+                point: centre,
+                normal: up,
+                offset: up.dot(start),
+                deviation: HEIGHT_DEVIATION_M,
+            }),
+            turn: Some(TurnPrior {
+                rotation: pose.rotation,
+                deviation: DVec3::new(
+                    UPRIGHT_DEVIATION_DEG.to_radians(),
+                    UPRIGHT_DEVIATION_DEG.to_radians(),
+                    TURN_DEVIATION_DEG.to_radians(),
+                ),
+            }),
+        };
     }
 
     /// The pose that shows the unmoved body as the fixed camera shows it moved by
@@ -199,8 +217,8 @@ impl Drawing for BodyDrawing<'_> {
         self.camera.intrinsics
     }
 
-    fn prior(&self) -> Option<PlanePrior> {
-        self.prior
+    fn priors(&self) -> Priors {
+        self.priors
     }
 
     fn samples(&self, pose: &PoseEstimate, spacing_px: f64) -> Result<Vec<Sample>, SolveError> {
