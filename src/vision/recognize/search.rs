@@ -6,11 +6,13 @@
 //!    body's depth), and the offset at which most of them lie on image edges running
 //!    their way is kept. A move across the line of sight is an image shift to first
 //!    order; a turn of a few degrees moves a small body's edges by a few pixels.
-//! 2. **Pose.** From the motion that the best offset stands for (a translation parallel
-//!    to the image at the body's depth), the body's pose is aligned with the picture's
-//!    edges ([`align_body`]), the rest of the scene in place.
-//! 3. **Bounds.** The motion is answered only when it carries the body's centre no
-//!    farther than [`SearchBounds::translation_m`] and turns it by no more than
+//! 2. **Pose.** From the motion that the best offset stands for (a slide at the height
+//!    of the body's centre), turned about the body's vertical axis by none and by half
+//!    the rotation bound either way, the body's pose is aligned with the picture's edges
+//!    ([`align_body`]), the rest of the scene in place.
+//! 3. **Bounds.** Of the poses found, the one with most of its edge samples on image
+//!    edges is answered, among those that carry the body's centre no farther than
+//!    [`SearchBounds::translation_m`] and turn it by no more than
 //!    [`SearchBounds::rotation_deg`].
 
 use glam::{DQuat, DVec2, DVec3};

@@ -24,6 +24,13 @@
 //! counts) per [`HEIGHT_DEVIATION_M`]. Seen from above the horizon, a slide across the
 //! line of sight and one along it then differ in the image, and the depth is fixed; a
 //! change of height that the edges show clearly (a body knocked over) still wins.
+//!
+//! A second prior holds the body's turn near none: its tilt (about the horizontal axes)
+//! with a deviation of [`UPRIGHT_DEVIATION_DEG`], its turn about the vertical with one of
+//! [`TURN_DEVIATION_DEG`]. A body standing on a table stays upright when it is pushed,
+//! and the turn of a body whose outline does not fix it (a many-sided cylinder, whose
+//! sides are smooth and not drawn) stays near the model's instead of wandering; a turn the
+//! edges show outweighs the prior by far.
 
 use glam::{DMat3, DQuat, DVec3};
 
@@ -68,8 +75,9 @@ pub struct AlignedBody {
 /// Finds the motion of body `body` (an index into [`Scene::bodies`]) that lays its visible
 /// edges, seen by `camera` with the rest of `scene` in place, on the edges of the picture
 /// whose edges `pyramid` holds, starting from `start` (the identity when the body is
-/// looked for near where the scene has it). The prior holds the centre to the height the
-/// scene gives it, whatever the start.
+/// looked for near where the scene has it). The priors hold the centre to the height the
+/// scene gives it and the body's turn near none (see the module documentation), whatever
+/// the start.
 ///
 /// Preconditions, refused with errors: `camera` is valid and of the pyramid's size,
 /// `body` is a body of the scene ([`SolveError::BadParameter`]), the options are in

@@ -387,3 +387,59 @@ fn edges_of_faces_seen_edge_on_are_not_sampled() {
         );
     }
 }
+
+/// The priors' cost at `pose`, with their normal equations.
+fn prior_fit(priors: &Priors, pose: PoseEstimate) -> Fit {
+    let mut fit = Fit {
+        cost: 0.0,
+        inliers: 0,
+        inlier_squares: 0.0,
+        equations: NormalEquations::zeros(),
+    };
+    priors.add_to(&mut fit, pose, true);
+    fit
+}
+
+#[test]
+fn the_priors_gradients_are_the_derivatives_of_their_costs() {
+    let mut rng = Rng(7);
+    for _ in 0..50 {
+        let camera = perturbed(&true_camera(), &mut rng, 0.3, 0.3);
+        let (r, t) = camera.to_opencv();
+        let rest = PoseEstimate::new(r, t);
+        // A body turned and pushed a little from where the prior holds it.
+        let turn = DQuat::from_axis_angle(rng.unit_vector(), rng.range(0.0, 3.0).to_radians());
+        let pose = PoseEstimate {
+            rotation: (rest.rotation * turn).normalize(),
+            translation: rest.translation + DVec3::new(0.02, -0.01, 0.03),
+        };
+        let priors = Priors {
+            plane: Some(PlanePrior {
+                point: DVec3::new(0.1, -0.2, 0.8),
+                normal: r * DVec3::Z,
+                offset: 0.5,
+                deviation: 0.01,
+            }),
+            turn: Some(TurnPrior {
+                rotation: rest.rotation,
+                deviation: DVec3::new(0.02, 0.02, 0.2),
+            }),
+        };
+        let fit = prior_fit(&priors, pose);
+        let h = 1e-6;
+        for i in 0..6 {
+            let mut step = PoseStep::zeros();
+            step[i] = h;
+            let up = prior_fit(&priors, pose.stepped(&step)).cost;
+            let down = prior_fit(&priors, pose.stepped(&(-step))).cost;
+            let numeric = (up - down) / (2.0 * h);
+            let analytic = fit.equations.gradient[i];
+            // The turn prior's step is exact to first order in the turn: a few percent
+            // at 3°.
+            assert!(
+                (numeric - analytic).abs() <= 0.05 * numeric.abs().max(analytic.abs()) + 1e-6,
+                "component {i}: numeric {numeric}, analytic {analytic}"
+            );
+        }
+    }
+}
