@@ -27,8 +27,8 @@ use serde_json::{Value, json};
 use winged::camera::{DEFAULT_NEAR, View};
 use winged::model::solids::{box_solid, cylinder, prism_solid, pyramid_solid};
 use winged::model::{Camera, Intrinsics, Pose, World};
-use winged::render::Scene;
 use winged::render::hidden::hidden_lines;
+use winged::render::{Mode, Options, Picture, SHADED_BACKGROUND, Scene, render};
 use winged::vision::image::Luma;
 use winged::vision::recognize::{DepthImage, RecognizeOptions, recognize};
 use winged::vision::solve::align::{EdgePyramid, align_camera};
@@ -409,6 +409,52 @@ fn read_png(path: &Path) -> (u32, u32, png::ColorType, png::BitDepth, Vec<u8>) {
     )
 }
 
+/// The LINE-2D baseline's templates: the model drawn by winged (shaded, grey) and which
+/// body covers each pixel (0 none, `k + 1` the scene's body `k`), as PNGs.
+fn write_model_views(dir: &Path, i: usize, drawn: &Scene, camera: &Camera) {
+    let options = Options {
+        background: SHADED_BACKGROUND,
+        ..Options::default()
+    };
+    let Ok(Picture::Rgb(rgb)) = render(drawn, camera, Mode::Shaded, &options) else {
+        panic!("a shaded picture is RGB");
+    };
+    let Ok(Picture::Ids { image, legend }) = render(drawn, camera, Mode::Ids, &options) else {
+        panic!("an ids picture");
+    };
+    let index: Vec<u8> = image
+        .data
+        .iter()
+        .map(|&v| {
+            if v == 0 {
+                return 0;
+            }
+            let id = legend[v as usize - 1];
+            let k = drawn
+                .bodies
+                .binary_search_by_key(&id, |b| b.id)
+                .expect("a body of the scene");
+            u8::try_from(k + 1).expect("fewer than 255 bodies")
+        })
+        .collect();
+    let write = |name: String, color: png::ColorType, bytes: &[u8]| {
+        let file = std::fs::File::create(dir.join(name)).expect("created");
+        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), rgb.width, rgb.height);
+        encoder.set_color(color);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder
+            .write_header()
+            .and_then(|mut w| w.write_image_data(bytes))
+            .expect("written");
+    };
+    write(format!("model_{i:03}.png"), png::ColorType::Rgb, &rgb.data);
+    write(
+        format!("model_bodies_{i:03}.png"),
+        png::ColorType::Grayscale,
+        &index,
+    );
+}
+
 /// Run-length code of a mask: alternating lengths of false and true runs.
 fn runs(bits: &[bool]) -> Vec<usize> {
     let mut out = Vec::new();
@@ -450,6 +496,7 @@ fn run_scene(dir: &Path, i: usize) -> Value {
         }
     }
     let names: Vec<Value> = drawn.bodies.iter().map(|b| json!(b.name)).collect();
+    write_model_views(dir, i, &drawn, &exact);
     std::fs::write(
         dir.join(format!("edges_{i:03}.json")),
         json!({"names": names, "points": templates}).to_string(),

@@ -105,7 +105,7 @@ def main():
                     "tp": 0, "fp": 0, "fn": 0, "low_there": 0, "low_found": 0,
                     "moved": 0, "moved_ok": 0, "removed": 0, "removed_absent": 0,
                     "there": 0, "there_absent": 0, "inter": 0, "union": 0,
-                    "vf_errors": [], "ms": [], "errors": 0, "runs": 0,
+                    "vf_errors": [], "ms": [], "errors": 0, "runs": 0, "kinds": {},
                 },
             )
             s["runs"] += 1
@@ -140,6 +140,8 @@ def main():
                         s["vf_errors"].append(abs(r["visible_fraction"] - visible))
                 if fate["fate"] == "moved" and visible >= 0.1:
                     s["moved"] += 1
+                    kind = s["kinds"].setdefault(name.rstrip("0123456789"), [0, 0])
+                    kind[1] += 1
                     if r is not None and r["status"] == "moved" and r["motion"]:
                         m, t = r["motion"], fate["motion"]
                         corners = corners_of(scene, name)
@@ -161,7 +163,9 @@ def main():
                             angle_between(np.array(m["rotation"]), quat_mul(q, tq))
                             for q in symmetries(corners)
                         )
-                        s["moved_ok"] += error < 0.01 and angle < 1.0
+                        ok = error < 0.01 and angle < 1.0
+                        s["moved_ok"] += ok
+                        kind[0] += ok
             if distractor.any():
                 mask = decode_runs(run["mask_runs"], size)
                 s["inter"] += int((mask & distractor).sum())
@@ -183,6 +187,19 @@ def main():
             f"{float(np.mean(vf <= 0.02)):.3f} (median {float(np.median(vf)):.4f}) | "
             f"{np.median(ms):.0f} / {np.percentile(ms, 90):.0f} | {s['errors']} |"
         )
+
+    kinds = sorted({k for s in stats.values() for k in s["kinds"]})
+    print()
+    print("Moved bodies within 1 cm and 1°, by kind:")
+    print()
+    print("| run | " + " | ".join(kinds) + " |")
+    print("|---|" + "---:|" * len(kinds))
+    for name, s in stats.items():
+        cells = []
+        for k in kinds:
+            ok, n = s["kinds"].get(k, (0, 0))
+            cells.append(f"{ok / n:.2f} ({ok}/{n})" if n else "–")
+        print(f"| {name} | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":

@@ -21,3 +21,4 @@ LIBGL_ALWAYS_SOFTWARE=1 GALLIUM_DRIVER=llvmpipe "$venv/bin/python" bench/recogni
 target/release/examples/recognition_bench run "$dir"
 "$venv/bin/python" bench/recognition/report.py "$dir"
 "$venv/bin/python" bench/recognition/chamfer.py "$dir"
+"$venv/bin/python" bench/recognition/linemod.py "$dir"
