@@ -2,22 +2,25 @@
 //! `bench/recognition/README.md` for the whole protocol).
 //!
 //! ```sh
-//! cargo run --release --example recognition_bench -- scenes DIR [--count 300] [--seed 1]
-//! cargo run --release --example recognition_bench -- run DIR
+//! cargo run --release --example recognition_bench -- scenes DIR [--count 300] [--seed 1] [--clutter]
+//! cargo run --release --example recognition_bench -- run DIR [--only N]
 //! ```
 //!
 //! `scenes` writes `DIR/scene_NNN.json`: the model world (as the server would hold it),
 //! the truth (the model with some bodies pushed by 1–10 cm and turned by 1–10°, some
 //! taken away, and distractors the model lacks put on the table), the truth's triangles
 //! for another renderer to draw, the exact camera and one off by up to 2° and 5 cm, and
-//! every model body's fate. `bench/recognition/render.py` draws the pictures.
+//! every model body's fate. `--clutter` puts the bodies 1 cm apart (not 12) and the
+//! camera 10–30° above the table (not 25–60°), so that bodies hide each other.
+//! `bench/recognition/render.py` draws the pictures.
 //!
 //! `run` recognizes every scene's picture with the exact camera (without and with
 //! depth) and with the rough camera (`refine_camera`), and writes
 //! `DIR/winged_NNN.json`: per run the reports, the unexplained mask's pixels (run-length
 //! coded), and the time (decoding the PNGs, finding edges, recognizing). It also writes
 //! each body's predicted visible edge points (`DIR/edges_NNN.json`), the templates of the
-//! chamfer baseline.
+//! chamfer baseline, and the model as winged draws it with the body covering each pixel
+//! (`DIR/model_NNN.png`, `DIR/model_bodies_NNN.png`), the templates of LINE-2D.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -225,8 +228,29 @@ fn table() -> World {
     world
 }
 
+/// How crowded a scene is and how low it is seen.
+#[derive(Clone, Copy)]
+struct Layout {
+    /// The least gap between two bodies, meters.
+    gap: f64,
+    /// The camera's elevation above the table, degrees.
+    elevation_deg: (f64, f64),
+}
+
+/// Bodies 12 cm apart, seen from 25–60° above the table: little occlusion.
+const SPREAD: Layout = Layout {
+    gap: 0.12,
+    elevation_deg: (25.0, 60.0),
+};
+
+/// Bodies 1 cm apart, seen from 10–30° above the table: bodies hide each other.
+const CLUTTER: Layout = Layout {
+    gap: 0.01,
+    elevation_deg: (10.0, 30.0),
+};
+
 /// One scene: the model, the truth, the cameras and the fates.
-fn scene(rng: &mut Rng) -> Value {
+fn scene(rng: &mut Rng, layout: Layout) -> Value {
     let count = 5 + rng.below(11);
     let distractors = rng.below(3);
     let mut placed: Vec<(DVec2, f64)> = Vec::new();
@@ -243,7 +267,7 @@ fn scene(rng: &mut Rng) -> Value {
             );
             placed
                 .iter()
-                .all(|&(p, q)| p.distance(at) > r + q + 0.12)
+                .all(|&(p, q)| p.distance(at) > r + q + layout.gap)
                 .then_some(at)
         });
         let Some(at) = spot else { continue };
@@ -292,9 +316,11 @@ fn scene(rng: &mut Rng) -> Value {
     for (name, kind, at, yaw) in &truth_adds {
         kind.insert(&mut truth, name, *at, *yaw);
     }
-    // The camera: toward the table's middle, from 1.3–2.2 m, 25–60° above the horizon.
+    // The camera: toward the table's middle, from 1.3–2.2 m, at the layout's elevation.
     let azimuth = rng.range(0.0, std::f64::consts::TAU);
-    let elevation = rng.range(25.0, 60.0).to_radians();
+    let elevation = rng
+        .range(layout.elevation_deg.0, layout.elevation_deg.1)
+        .to_radians();
     let distance = rng.range(1.3, 2.2);
     let target = DVec3::new(rng.range(-0.1, 0.1), rng.range(-0.1, 0.1), TABLE_TOP);
     let eye = target
@@ -573,7 +599,7 @@ fn run_scene(dir: &Path, i: usize) -> Value {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = "usage: recognition_bench scenes DIR [--count N] [--seed S] | run DIR [--only N]";
+    let usage = "usage: recognition_bench scenes DIR [--count N] [--seed S] [--clutter] | run DIR [--only N]";
     let (Some(command), Some(dir)) = (args.first(), args.get(1)) else {
         eprintln!("{usage}");
         std::process::exit(2);
@@ -590,8 +616,13 @@ fn main() {
             std::fs::create_dir_all(&dir).expect("a directory");
             let count = flag("--count", 300) as usize;
             let mut rng = Rng(flag("--seed", 1));
+            let layout = if args.iter().any(|a| a == "--clutter") {
+                CLUTTER
+            } else {
+                SPREAD
+            };
             for i in 0..count {
-                let s = scene(&mut rng);
+                let s = scene(&mut rng, layout);
                 std::fs::write(dir.join(format!("scene_{i:03}.json")), s.to_string())
                     .expect("written");
             }
