@@ -20,6 +20,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from baseline import judged, print_table, tally, winged_there
+
 CAP = 10.0
 # The baseline's threshold is swept on the same scenes (a favour to it): the best F1 is
 # the one to beat.
@@ -44,10 +46,6 @@ def chamfer_score(distance, points):
     return best
 
 
-def f1(tp, fp, fn):
-    return 2 * tp / (2 * tp + fp + fn) if tp else 0.0
-
-
 def main():
     folder = Path(sys.argv[1])
     counts = {}
@@ -58,7 +56,6 @@ def main():
         scene = json.loads((folder / f"scene_{i}.json").read_text())
         truth = json.loads((folder / f"truth_{i}.json").read_text())
         answer = json.loads((folder / f"winged_{i}.json").read_text())
-        fates = {f["name"]: f["fate"] for f in scene["fates"]}
         start = time.perf_counter()
         grey = cv2.imread(str(folder / f"image_{i}.png"), cv2.IMREAD_GRAYSCALE)
         canny = cv2.Canny(cv2.GaussianBlur(grey, (5, 5), 1.0), 30, 90)
@@ -68,34 +65,13 @@ def main():
             for name, points in zip(edges["names"], edges["points"])
         }
         times.append((time.perf_counter() - start) * 1e3)
-        image_run = next(r for r in answer["runs"] if r["run"] == "image")
-        winged = {b["name"]: b["status"] in ("seen", "moved") for b in image_run["bodies"]}
-        for name, fate in fates.items():
-            if name not in scores:
-                continue
-            if fate == "removed":
-                truly = False
-            else:
-                whole = truth["whole_px"].get(name, 0)
-                if not whole or truth["visible_px"].get(name, 0) / whole < 0.3:
-                    continue
-                truly = True
+        winged = winged_there(answer)
+        for name, truly in judged(scene, truth, scores):
             said_by = [("winged", winged.get(name, False))] + [
                 (f"chamfer ≤ {t} px", scores[name] <= t) for t in THRESHOLDS
             ]
-            for method, said in said_by:
-                c = counts.setdefault(method, [0, 0, 0])
-                if said and truly:
-                    c[0] += 1
-                elif said:
-                    c[1] += 1
-                elif truly:
-                    c[2] += 1
-    print("| method | F1 of \"there\" | tp / fp / fn | median ms per picture |")
-    print("|---|---:|---:|---:|")
-    for method, (tp, fp, fn) in counts.items():
-        ms = f"{np.median(times):.0f}" if method.startswith("chamfer") else "see the table above"
-        print(f"| {method} | {f1(tp, fp, fn):.3f} | {tp} / {fp} / {fn} | {ms} |")
+            tally(counts, said_by, truly)
+    print_table(counts, lambda m: times if m.startswith("chamfer") else None)
 
 
 if __name__ == "__main__":

@@ -25,16 +25,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from baseline import judged, print_table, tally, winged_there
+
 REACH = 36
 THRESHOLDS = (60, 70, 80, 90)
 LOWEST = min(THRESHOLDS)
 # Features per template: LINE-2D's default (63), and fewer, which lets the small bodies
 # of these scenes have templates at all; both are swept.
 FEATURES = (63, 31)
-
-
-def f1(tp, fp, fn):
-    return 2 * tp / (2 * tp + fp + fn) if tp else 0.0
 
 
 def as_colour(grey):
@@ -85,42 +83,21 @@ def main():
                 if abs(m.x - x) <= REACH and abs(m.y - y) <= REACH:
                     key = (features, m.class_id)
                     best[key] = max(best.get(key, 0.0), m.similarity)
-        image_run = next(r for r in answer["runs"] if r["run"] == "image")
-        winged = {b["name"]: b["status"] in ("seen", "moved") for b in image_run["bodies"]}
-        predicted = {b["name"] for b in image_run["bodies"]}
-        for name, fate in fates.items():
-            if name not in predicted:
-                continue
-            if fate == "removed":
-                truly = False
-            else:
-                whole = truth["whole_px"].get(name, 0)
-                if not whole or truth["visible_px"].get(name, 0) / whole < 0.3:
-                    continue
-                truly = True
-            said_by = [("winged", winged.get(name, False))] + [
+        winged = winged_there(answer)
+        predicted = set(winged)
+        for name, truly in judged(scene, truth, predicted):
+            said_by = [("winged", winged[name])] + [
                 (f"LINE-2D, {n} features, ≥ {t}", best.get((n, name), 0.0) >= t)
                 for n in FEATURES
                 for t in THRESHOLDS
             ]
-            for method, said in said_by:
-                c = counts.setdefault(method, [0, 0, 0])
-                if said and truly:
-                    c[0] += 1
-                elif said:
-                    c[1] += 1
-                elif truly:
-                    c[2] += 1
+            tally(counts, said_by, truly)
     for n in FEATURES:
         print(f"LINE-2D, {n} features: {no_template.get(n, 0)} bodies gave too few for a template")
-    print("| method | F1 of \"there\" | tp / fp / fn | median ms per picture |")
-    print("|---|---:|---:|---:|")
-    for method, (tp, fp, fn) in counts.items():
-        ms = "see the table above"
-        for n in FEATURES:
-            if method.startswith(f"LINE-2D, {n} "):
-                ms = f"{np.median(times[n]):.0f}"
-        print(f"| {method} | {f1(tp, fp, fn):.3f} | {tp} / {fp} / {fn} | {ms} |")
+    print_table(
+        counts,
+        lambda m: next((times[n] for n in FEATURES if m.startswith(f"LINE-2D, {n} ")), None),
+    )
 
 
 if __name__ == "__main__":
