@@ -1,5 +1,5 @@
 //! Vision: image analysis, camera solution and recognition, what pictures and the points
-//! seen in them say about the world and the camera that took them. Perception is to come.
+//! seen in them say about the world and the camera that took them.
 //!
 //! * [`image`]: image analysis shared by whatever reads pictures: grey levels, a
 //!   coarse-to-fine pyramid, edges with sub-pixel positions and normals, and their distance
@@ -12,6 +12,8 @@
 //! * [`recognize`]: which modeled bodies a picture shows (seen, moved, absent, occluded),
 //!   their visible fractions by exact polygon clipping, and the regions nothing modeled
 //!   explains.
+//! * [`perceive`]: new bodies from silhouettes seen by solved cameras: the cones through
+//!   them intersected view after view (the visual hull).
 //!
 //! Pure, synchronous numerics with no I/O. The layer reads the world through [`model`]
 //! (cameras, poses), [`camera`] (projection) and [`render`] (the scene and its exact
@@ -22,6 +24,7 @@
 //! [`render`]: crate::render
 
 pub mod image;
+pub mod perceive;
 pub mod recognize;
 pub mod solve;
 #[cfg(test)]

@@ -255,6 +255,12 @@ pub struct ContourOptions {
     /// Regions whose `area` is less than this, px², are left out; zero, a negative value
     /// or NaN keeps every region.
     pub min_area_px: f64,
+    /// Simplify outward only: each ring is simplified from its crack corners (no
+    /// smoothed outline) so that every crack corner stays on the region's side of the
+    /// simplified ring, which then holds the union of the region's pixel squares and is
+    /// within `tolerance_px` of its crack boundary. Used where a region must not lose
+    /// area (silhouettes that carve solids).
+    pub outward: bool,
 }
 
 impl Default for ContourOptions {
@@ -263,6 +269,7 @@ impl Default for ContourOptions {
         ContourOptions {
             tolerance_px: 0.5,
             min_area_px: 0.0,
+            outward: false,
         }
     }
 }
@@ -293,7 +300,7 @@ pub fn trace_regions(mask: &Mask, options: &ContourOptions) -> Vec<Region> {
         .zip(pixels)
         .filter_map(|(rings, pixels)| {
             let rings = if tolerance > 0.0 {
-                simplify_region(rings, tolerance)
+                simplify_region(rings, tolerance, options.outward)
             } else {
                 rings
             };
@@ -430,7 +437,10 @@ fn first_in_raster_order(ring: &[[f64; 2]]) -> usize {
 
 /// The rings of one region (outer first) simplified within `tolerance` > 0, each replaced
 /// by its crack ring where simplifying would make it invalid.
-fn simplify_region(exact: Vec<Vec<[f64; 2]>>, tolerance: f64) -> Vec<Vec<[f64; 2]>> {
+///
+/// With `outward`, each ring is simplified by [`outward_douglas_peucker`] from its crack
+/// corners, and kept only where it does not lose area.
+fn simplify_region(exact: Vec<Vec<[f64; 2]>>, tolerance: f64, outward: bool) -> Vec<Vec<[f64; 2]>> {
     let reach = if tolerance < 0.5 {
         tolerance / (1.0 - 4.0 * tolerance * tolerance).sqrt()
     } else {
@@ -439,10 +449,20 @@ fn simplify_region(exact: Vec<Vec<[f64; 2]>>, tolerance: f64) -> Vec<Vec<[f64; 2
     let mut simple: Vec<Option<Vec<[f64; 2]>>> = exact
         .iter()
         .map(|ring| {
-            let s = douglas_peucker(&outline(ring, reach), tolerance);
+            let s = if outward {
+                outward_douglas_peucker(ring, tolerance)
+            } else {
+                douglas_peucker(&outline(ring, reach), tolerance)
+            };
             let (a, a0) = (signed_area(&s), signed_area(ring));
             let distinct = (0..s.len()).all(|i| s[i] != s[(i + 1) % s.len()]);
-            let valid = s.len() >= 3 && distinct && a * a0 > 0.0 && a.abs() >= 0.5 * a0.abs();
+            // Outward, an outer ring may only grow and a hole only shrink.
+            let kept_area = if outward {
+                a >= a0
+            } else {
+                a.abs() >= 0.5 * a0.abs()
+            };
+            let valid = s.len() >= 3 && distinct && a * a0 > 0.0 && kept_area;
             (valid && s != *ring).then_some(s)
         })
         .collect();
@@ -526,6 +546,51 @@ fn douglas_peucker(ring: &[[f64; 2]], tolerance: f64) -> Vec<[f64; 2]> {
             let d = distance_to_segment(ring[i], ring[a], ring[b]);
             if d > worst {
                 (split, worst) = (Some(i), d);
+            }
+            i = (i + 1) % n;
+        }
+        if let Some(m) = split {
+            keep[m] = true;
+            chains.push((a, m));
+            chains.push((m, b));
+        }
+    }
+    (0..n)
+        .map(|k| (first + k) % n)
+        .filter(|&i| keep[i])
+        .map(|i| ring[i])
+        .collect()
+}
+
+/// Douglas–Peucker on a closed ring that only moves outward: a chord replaces the points
+/// between its ends only when none of them lies on its right (outside the region, which
+/// is on the left of every edge) and none is farther than `tolerance` from it; otherwise
+/// the chain is split at the point farthest to the right, or, with none on the right, at
+/// the farthest one. Every point of `ring` is then on the left of, or on, the kept
+/// ring's edge that spans it, and within `tolerance` of it.
+fn outward_douglas_peucker(ring: &[[f64; 2]], tolerance: f64) -> Vec<[f64; 2]> {
+    let n = ring.len();
+    if n < 4 {
+        return ring.to_vec();
+    }
+    let first = first_in_raster_order(ring);
+    // The first point in raster order is a corner of the region's hull, so a split
+    // there and at the point halfway round loses nothing.
+    let half = (first + n / 2) % n;
+    let mut keep = vec![false; n];
+    keep[first] = true;
+    keep[half] = true;
+    let mut chains = vec![(first, half), (half, first)];
+    while let Some((a, b)) = chains.pop() {
+        let mut split = None;
+        // Points on the right rank above every point on the left.
+        let mut worst = (false, tolerance);
+        let mut i = (a + 1) % n;
+        while i != b {
+            let right = orient(ring[a], ring[b], ring[i]) < 0;
+            let d = distance_to_segment(ring[i], ring[a], ring[b]);
+            if (right, d) > worst {
+                (split, worst) = (Some(i), (right, d));
             }
             i = (i + 1) % n;
         }
@@ -712,6 +777,7 @@ mod tests {
         ContourOptions {
             tolerance_px: 0.0,
             min_area_px: 0.0,
+            outward: false,
         }
     }
 
@@ -719,6 +785,7 @@ mod tests {
         ContourOptions {
             tolerance_px,
             min_area_px: 0.0,
+            outward: false,
         }
     }
 
@@ -1309,6 +1376,7 @@ mod tests {
             let options = ContourOptions {
                 tolerance_px: odd,
                 min_area_px: odd,
+                outward: false,
             };
             assert_eq!(trace_regions(&mask, &options), exact_regions, "{odd}");
         }

@@ -645,6 +645,7 @@ pub fn recognize(
         &ContourOptions {
             tolerance_px: options.outline_tolerance_px,
             min_area_px: 0.0,
+            outward: false,
         },
     );
     unexplained.sort_by(|a, b| b.area.total_cmp(&a.area));

@@ -1,0 +1,148 @@
+//! A closed polyhedron as polygons, each face with what made it: the form perception
+//! carves, before it becomes a winged-edge [`Body`].
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::model::body::Body;
+use crate::model::ids::Serials;
+use crate::model::solids::BuildError;
+
+/// What made a face of a perceived body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Maker {
+    /// A wall of a view's cone: the plane through the camera's centre and one edge of a
+    /// silhouette ring (`ring` 0 is the outer boundary, then the holes; `edge` `k` runs
+    /// from the ring's point `k` to point `k + 1`).
+    Wall {
+        /// The view, numbered across every request that carved the body.
+        view: u32,
+        /// The silhouette ring.
+        ring: u32,
+        /// The edge of that ring.
+        edge: u32,
+    },
+    /// The plane at a view's `near` depth.
+    Near {
+        /// The view.
+        view: u32,
+    },
+    /// The plane at a view's `far` depth.
+    Far {
+        /// The view.
+        view: u32,
+    },
+    /// A face of the convex bound carving starts from; a complete carving leaves none.
+    Bound {
+        /// The view whose (dilated) silhouette hull the face bounds.
+        view: u32,
+    },
+}
+
+impl Maker {
+    /// The view that made the face.
+    pub fn view(&self) -> u32 {
+        match *self {
+            Maker::Wall { view, .. }
+            | Maker::Near { view }
+            | Maker::Far { view }
+            | Maker::Bound { view } => view,
+        }
+    }
+}
+
+/// A closed polyhedron as polygons.
+///
+/// Invariants (where a carving produced it): closed, manifold and consistently oriented,
+/// faces counter-clockwise seen from outside, one connected piece; `makers[i]` made face
+/// `i`.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Mesh {
+    /// Vertex loci.
+    pub positions: Vec<DVec3>,
+    /// Faces, each a ring of indices into `positions`.
+    pub faces: Vec<Vec<u32>>,
+    /// What made each face.
+    pub makers: Vec<Maker>,
+}
+
+impl Mesh {
+    /// The volume enclosed, by the divergence theorem over a fan of each face.
+    pub fn volume(&self) -> f64 {
+        let mut six = 0.0;
+        for f in &self.faces {
+            let a = self.positions[f[0] as usize];
+            for k in 1..f.len() - 1 {
+                let b = self.positions[f[k] as usize];
+                let c = self.positions[f[k + 1] as usize];
+                six += a.dot(b.cross(c));
+            }
+        }
+        six / 6.0
+    }
+
+    /// The winged-edge body of these polygons (refused as [`Body::from_polygons`]
+    /// refuses); face `i` of the body is face `i` here.
+    pub fn to_body(&self, serials: &mut Serials) -> Result<Body, BuildError> {
+        Body::from_polygons(serials, &self.positions, &self.faces)
+    }
+
+    /// The least and greatest corner of the vertices' bounding box.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        self.positions.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        )
+    }
+
+    /// The same faces split into their connected pieces (faces joined across edges),
+    /// each with only the vertices it uses, in order of each piece's first face.
+    pub fn pieces(self) -> Vec<Mesh> {
+        let n = self.faces.len();
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn root(parent: &mut [usize], mut i: usize) -> usize {
+            while parent[i] != i {
+                parent[i] = parent[parent[i]];
+                i = parent[i];
+            }
+            i
+        }
+        let mut by_edge = std::collections::HashMap::new();
+        for (i, f) in self.faces.iter().enumerate() {
+            for k in 0..f.len() {
+                let (a, b) = (f[k], f[(k + 1) % f.len()]);
+                if let Some(j) = by_edge.insert((a.min(b), a.max(b)), i) {
+                    let (ri, rj) = (root(&mut parent, i), root(&mut parent, j));
+                    parent[ri] = rj;
+                }
+            }
+        }
+        let mut order: Vec<usize> = Vec::new();
+        let mut piece_of = vec![usize::MAX; n];
+        let mut pieces: Vec<Mesh> = Vec::new();
+        let mut index: Vec<std::collections::HashMap<u32, u32>> = Vec::new();
+        for i in 0..n {
+            let r = root(&mut parent, i);
+            if piece_of[r] == usize::MAX {
+                piece_of[r] = pieces.len();
+                order.push(r);
+                pieces.push(Mesh::default());
+                index.push(Default::default());
+            }
+            let p = piece_of[r];
+            let ring = self.faces[i]
+                .iter()
+                .map(|&v| {
+                    *index[p].entry(v).or_insert_with(|| {
+                        pieces[p].positions.push(self.positions[v as usize]);
+                        (pieces[p].positions.len() - 1) as u32
+                    })
+                })
+                .collect();
+            pieces[p].faces.push(ring);
+            pieces[p].makers.push(self.makers[i]);
+        }
+        pieces
+    }
+}

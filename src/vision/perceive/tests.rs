@@ -1,0 +1,278 @@
+//! Visual hulls of solids whose masks a ray caster in the test draws (not winged's
+//! renderer), checked against the truth and against the general boolean on the same
+//! cones.
+
+use glam::{DVec2, DVec3};
+
+use super::*;
+use crate::model::camera::Intrinsics;
+use crate::model::check_solid;
+use crate::vision::image::Mask;
+
+/// A solid the test draws: a union of axis-aligned boxes, or a ball.
+#[derive(Clone, Debug)]
+enum Solid {
+    Boxes(Vec<(DVec3, DVec3)>),
+    Ball(f64),
+}
+
+impl Solid {
+    /// Whether the ray from `o` along `d` meets the solid in front of `o`.
+    fn hit(&self, o: DVec3, d: DVec3) -> bool {
+        match self {
+            Solid::Boxes(boxes) => boxes.iter().any(|&(lo, hi)| {
+                let inv = d.recip();
+                let (a, b) = ((lo - o) * inv, (hi - o) * inv);
+                let t0 = a.min(b).max_element();
+                let t1 = a.max(b).min_element();
+                t1 >= t0.max(0.0)
+            }),
+            Solid::Ball(r) => {
+                let b = o.dot(d);
+                let c = o.length_squared() - r * r;
+                b * b - c >= 0.0 && -b + (b * b - c).sqrt() > 0.0
+            }
+        }
+    }
+
+    fn volume(&self) -> f64 {
+        match self {
+            Solid::Boxes(boxes) => boxes
+                .iter()
+                .map(|(lo, hi)| (*hi - *lo).element_product())
+                .sum(),
+            Solid::Ball(r) => 4.0 / 3.0 * std::f64::consts::PI * r * r * r,
+        }
+    }
+
+    /// Points of the solid: box corners pulled in by a nanometre, or points of the
+    /// ball's surface pulled in likewise.
+    fn samples(&self) -> Vec<DVec3> {
+        match self {
+            Solid::Boxes(boxes) => boxes
+                .iter()
+                .flat_map(|&(lo, hi)| {
+                    let (lo, hi) = (lo + 1e-9, hi - 1e-9);
+                    (0..8).map(move |i| {
+                        DVec3::new(
+                            if i & 1 == 0 { lo.x } else { hi.x },
+                            if i & 2 == 0 { lo.y } else { hi.y },
+                            if i & 4 == 0 { lo.z } else { hi.z },
+                        )
+                    })
+                })
+                .collect(),
+            Solid::Ball(r) => fibonacci(200).into_iter().map(|d| d * (r - 1e-9)).collect(),
+        }
+    }
+}
+
+/// `n` unit vectors spread evenly over the sphere.
+fn fibonacci(n: usize) -> Vec<DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let a = golden * i as f64;
+            DVec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect()
+}
+
+/// `n` cameras at `distance` from the origin on a Fibonacci sphere, looking at it.
+fn cameras(n: usize, distance: f64, focal: f64) -> Vec<Camera> {
+    let intrinsics = Intrinsics::centered(640, 480, focal).expect("intrinsics");
+    fibonacci(n)
+        .into_iter()
+        .map(|d| {
+            let up = if d.z.abs() > 0.9 { DVec3::X } else { DVec3::Z };
+            Camera::look_at(d * distance, DVec3::ZERO, up, intrinsics).expect("camera")
+        })
+        .collect()
+}
+
+/// The mask of `solid` seen by `camera`: a pixel is inside when the ray through its
+/// centre meets the solid.
+fn draw(solid: &Solid, camera: &Camera) -> Mask {
+    let k = camera.intrinsics;
+    let o = camera.position();
+    Mask::from_fn(k.width, k.height, |x, y| {
+        let d = camera.pixel_ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+        solid.hit(o, d)
+    })
+}
+
+fn sights(solid: &Solid, cameras: &[Camera]) -> Vec<Sight> {
+    cameras
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let mask = draw(solid, c);
+            let mut found = silhouette::silhouettes(&mask, 1.0, 0.0);
+            assert_eq!(found.len(), 1, "one region in view {i}");
+            Sight {
+                camera: *c,
+                outline: found.remove(0).outline,
+                view: i as u32,
+            }
+        })
+        .collect()
+}
+
+/// The winding number of a closed mesh about `x` (1 inside, 0 outside), from the solid
+/// angles of a fan of each face.
+fn winding(mesh: &Mesh, x: DVec3) -> f64 {
+    let mut total = 0.0;
+    for f in &mesh.faces {
+        let a = mesh.positions[f[0] as usize] - x;
+        for k in 1..f.len() - 1 {
+            let b = mesh.positions[f[k] as usize] - x;
+            let c = mesh.positions[f[k + 1] as usize] - x;
+            let (la, lb, lc) = (a.length(), b.length(), c.length());
+            let num = a.dot(b.cross(c));
+            let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+            total += 2.0 * num.atan2(den);
+        }
+    }
+    total / (4.0 * std::f64::consts::PI)
+}
+
+/// Every piece is a valid closed body (the kernel's validator), and the pieces hold
+/// every sample point of the solid.
+fn assert_valid_and_holding(pieces: &[Mesh], solid: &Solid) {
+    for (i, p) in pieces.iter().enumerate() {
+        let body = p
+            .to_body(&mut Serials::new())
+            .unwrap_or_else(|e| panic!("piece {i}: {e}"));
+        let report = check_solid(&body, 1e-9);
+        assert!(report.is_ok(), "piece {i}: {report:?}");
+        assert!(p.volume() > 0.0);
+    }
+    for x in solid.samples() {
+        let w: f64 = pieces.iter().map(|p| winding(p, x)).sum();
+        assert!(
+            (w - 1.0).abs() < 1e-6,
+            "{x} is not inside the hull (winding {w})"
+        );
+    }
+}
+
+fn hull(solid: &Solid, cams: &[Camera]) -> (Vec<Mesh>, Tally) {
+    let mut tally = Tally::default();
+    let pieces = visual_hull(&sights(solid, cams), Depths::default(), &mut tally).expect("hull");
+    (pieces, tally)
+}
+
+fn total_volume(pieces: &[Mesh]) -> f64 {
+    pieces.iter().map(Mesh::volume).sum()
+}
+
+fn a_box() -> Solid {
+    Solid::Boxes(vec![(
+        DVec3::new(-0.1, -0.07, -0.05),
+        DVec3::new(0.1, 0.07, 0.05),
+    )])
+}
+
+#[test]
+fn a_box_seen_by_four_cameras_is_held_by_its_hull() {
+    let solid = a_box();
+    let (pieces, tally) = hull(&solid, &cameras(4, 0.6, 500.0));
+    assert_eq!(pieces.len(), 1);
+    assert_valid_and_holding(&pieces, &solid);
+    let v = total_volume(&pieces);
+    assert!(v > solid.volume() && v < 3.0 * solid.volume(), "volume {v}");
+    assert_eq!(tally.boolean, 0, "{tally:?}");
+}
+
+#[test]
+fn the_image_method_and_the_general_boolean_agree_on_the_same_cones() {
+    let solid = a_box();
+    let cams = cameras(3, 0.6, 500.0);
+    let sights = sights(&solid, &cams);
+    let depths = Depths::default();
+    let mut tally = Tally::default();
+    let carved = visual_hull(&sights, depths, &mut tally).expect("carved");
+    assert_eq!(tally.boolean, 0);
+    // The same cones intersected by the general boolean alone.
+    let s0 = &sights[0];
+    let mut reference = vec![cone::cone(
+        &s0.camera,
+        &s0.outline.rings[0],
+        depths.near,
+        depths.far,
+        0,
+        0,
+    )];
+    for s in &sights[1..] {
+        reference = reference
+            .iter()
+            .flat_map(|p| carve_by_boolean(p, s, depths).expect("boolean"))
+            .collect();
+    }
+    let (a, b) = (total_volume(&carved), total_volume(&reference));
+    assert!((a - b).abs() <= 1e-9 * b, "image {a} against boolean {b}");
+    assert_eq!(carved.len(), reference.len());
+}
+
+#[test]
+fn every_face_records_the_view_that_made_it() {
+    let solid = a_box();
+    let (pieces, _) = hull(&solid, &cameras(5, 0.6, 500.0));
+    for p in &pieces {
+        for m in &p.makers {
+            assert!(matches!(m, Maker::Wall { view, .. } if *view < 5), "{m:?}");
+        }
+    }
+    let views: std::collections::BTreeSet<u32> = pieces
+        .iter()
+        .flat_map(|p| p.makers.iter().map(Maker::view))
+        .collect();
+    assert!(views.len() >= 3, "{views:?}");
+}
+
+#[test]
+fn an_l_prism_keeps_its_notch_where_a_view_sees_into_it() {
+    // Seen along z, the notch is a concave corner of every silhouette near that axis.
+    let solid = Solid::Boxes(vec![
+        (DVec3::new(-0.1, -0.1, -0.05), DVec3::new(0.1, 0.0, 0.05)),
+        (DVec3::new(-0.1, 0.0, -0.05), DVec3::new(0.0, 0.1, 0.05)),
+    ]);
+    let (pieces, _) = hull(&solid, &cameras(8, 0.7, 450.0));
+    assert_valid_and_holding(&pieces, &solid);
+    let notch = DVec3::new(0.07, 0.07, 0.0);
+    let w: f64 = pieces.iter().map(|p| winding(p, notch)).sum();
+    assert!(w.abs() < 1e-6, "the notch is filled: winding {w}");
+}
+
+#[test]
+fn a_frame_seen_through_its_hole_keeps_the_hole() {
+    // A square frame in the z = 0 plane: seen from above, its silhouette has a hole.
+    let solid = Solid::Boxes(vec![
+        (DVec3::new(-0.1, -0.1, -0.02), DVec3::new(0.1, -0.05, 0.02)),
+        (DVec3::new(-0.1, 0.05, -0.02), DVec3::new(0.1, 0.1, 0.02)),
+        (
+            DVec3::new(-0.1, -0.05, -0.02),
+            DVec3::new(-0.05, 0.05, 0.02),
+        ),
+        (DVec3::new(0.05, -0.05, -0.02), DVec3::new(0.1, 0.05, 0.02)),
+    ]);
+    let (pieces, _) = hull(&solid, &cameras(12, 0.7, 450.0));
+    assert_valid_and_holding(&pieces, &solid);
+    let w: f64 = pieces.iter().map(|p| winding(p, DVec3::ZERO)).sum();
+    assert!(w.abs() < 1e-6, "the hole is filled: winding {w}");
+}
+
+#[test]
+fn a_ball_seen_by_more_cameras_has_less_to_spare() {
+    let solid = Solid::Ball(0.1);
+    let mut last = f64::INFINITY;
+    for n in [4, 8, 16] {
+        let (pieces, _) = hull(&solid, &cameras(n, 0.5, 500.0));
+        assert_valid_and_holding(&pieces, &solid);
+        let excess = total_volume(&pieces) / solid.volume() - 1.0;
+        assert!(excess > 0.0 && excess < last, "{n} views: excess {excess}");
+        last = excess;
+    }
+}
