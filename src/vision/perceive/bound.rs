@@ -1,5 +1,5 @@
-//! The convex bound carving starts from: the intersection of every view's frustum
-//! around its silhouette's convex hull.
+//! The convex bound carving starts from: one view's frustum around its silhouette's
+//! convex hull, cut to the depths every other view spans.
 //!
 //! Each view's frustum has the hull, widened by [`WIDEN_NEAR_PX`] at the near depth
 //! and [`WIDEN_FAR_PX`] at the far depth, as its ends; its side faces are trapezoids
@@ -13,7 +13,7 @@
 //! point with a tolerance: the bound only has to hold the hull and be a closed convex
 //! polyhedron, not to be exact.
 
-use std::collections::HashMap;
+use crate::model::boolean::Map;
 
 use glam::{DVec2, DVec3};
 use robust::{Coord, orient2d};
@@ -82,6 +82,22 @@ pub fn frustum(
     Some(Frustum { mesh, planes })
 }
 
+/// `first`'s frustum cut to the near and far planes of the others: `None` when
+/// nothing is left (or too thin to hold a solid).
+pub fn start(first: &Frustum, others: &[Frustum]) -> Option<Mesh> {
+    let mut body = first.mesh.clone();
+    for f in others {
+        for (plane, maker) in f.planes.iter().zip(&f.mesh.makers) {
+            if matches!(maker, Maker::Near { .. } | Maker::Far { .. })
+                && let Some(cut) = clip(&body, *plane, *maker)?
+            {
+                body = cut;
+            }
+        }
+    }
+    Some(body)
+}
+
 /// The intersection of the frustums: `None` when it is empty (or too thin to hold a
 /// solid).
 pub fn intersect(frustums: &[Frustum]) -> Option<Mesh> {
@@ -89,7 +105,9 @@ pub fn intersect(frustums: &[Frustum]) -> Option<Mesh> {
     let mut body = first.mesh.clone();
     for f in rest {
         for (plane, maker) in f.planes.iter().zip(&f.mesh.makers) {
-            body = clip(&body, *plane, *maker)?;
+            if let Some(cut) = clip(&body, *plane, *maker)? {
+                body = cut;
+            }
         }
     }
     Some(body)
@@ -107,21 +125,21 @@ fn plane_of(mesh: &Mesh, f: &[u32]) -> (DVec3, f64) {
     (n, n.dot(middle))
 }
 
-/// The part of convex `body` where `n·x ≤ d`, its new face made by `maker`; `None`
-/// when nothing with volume is left.
-fn clip(body: &Mesh, (n, d): (DVec3, f64), maker: Maker) -> Option<Mesh> {
+/// The part of convex `body` where `n·x ≤ d`, its new face made by `maker`: `None`
+/// when nothing with volume is left, `Some(None)` when the plane cuts nothing off.
+fn clip(body: &Mesh, (n, d): (DVec3, f64), maker: Maker) -> Option<Option<Mesh>> {
     let (lo, hi) = body.bounds();
     let tol = 1e-12 * (hi - lo).length().max(d.abs()).max(1.0);
     let side: Vec<f64> = body.positions.iter().map(|p| n.dot(*p) - d).collect();
     if side.iter().all(|&s| s <= tol) {
-        return Some(body.clone());
+        return Some(None);
     }
     if side.iter().all(|&s| s >= -tol) {
         return None;
     }
     let mut out = Mesh::default();
-    let mut kept: HashMap<u32, u32> = HashMap::new();
-    let mut made: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut kept: Map<u32, u32> = Map::default();
+    let mut made: Map<(u32, u32), u32> = Map::default();
     let mut on_plane: Vec<u32> = Vec::new();
     let mut keep = |out: &mut Mesh, v: u32| -> u32 {
         *kept.entry(v).or_insert_with(|| {
@@ -183,7 +201,7 @@ fn clip(body: &Mesh, (n, d): (DVec3, f64), maker: Maker) -> Option<Mesh> {
     });
     out.faces.push(on_plane);
     out.makers.push(maker);
-    (out.volume() > 0.0).then_some(out)
+    (out.volume() > 0.0).then_some(Some(out))
 }
 
 /// The convex hull of `points`, counter-clockwise in (u, v) (turning from +u toward +v),

@@ -27,17 +27,21 @@
 //!
 //! # Refusals
 //!
+//! A face or wall left around a hole (a winged-edge face is one ring) is cut into
+//! rings without holes by chords ([`super::holes`]).
+//!
 //! Where the image decisions meet a degenerate configuration (a vertex's projection on
 //! the outline, an edge through an outline corner, a face seen edge-on, rays that do
-//! not alternate in and out), or the result would need a face with a hole (a winged-edge
-//! face is one ring), [`carve`] refuses with [`Unsure`] and leaves the caller to use the
-//! general boolean. A refusal changes nothing.
+//! not alternate in and out), or no clear chord cuts a face around a hole, [`carve`]
+//! refuses with [`Unsure`] and leaves the caller to use the general boolean. A refusal
+//! changes nothing.
 
-use std::collections::HashMap;
+use crate::model::boolean::{Map, Set};
 
 use glam::{DVec2, DVec3};
 use robust::{Coord, orient2d};
 
+use super::holes;
 use super::mesh::{Maker, Mesh};
 use crate::model::camera::Camera;
 
@@ -62,8 +66,8 @@ pub enum Unsure {
     /// The pieces of a face or a wall do not link into rings.
     #[error("the pieces of a face do not link into rings")]
     Tangled,
-    /// A face or wall of the result would surround a hole.
-    #[error("a face of the result would surround a hole")]
+    /// A face or wall of the result would surround a hole that no clear chords cut.
+    #[error("a face of the result surrounds a hole that no clear chords cut")]
     Hole,
 }
 
@@ -114,7 +118,7 @@ pub fn carve(
         .collect::<Result<_, _>>()?;
 
     // Undirected edges of the mesh.
-    let mut edge_ids: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut edge_ids: Map<(u32, u32), u32> = Map::default();
     let mut edge_ends: Vec<(u32, u32)> = Vec::new();
     for f in &mesh.faces {
         for k in 0..f.len() {
@@ -174,7 +178,8 @@ pub fn carve(
         let toward = normal.dot(centre - middle);
         let slant = toward / (normal.length() * (centre - middle).length());
         // Turned toward the camera, a face runs clockwise in (u, v), where v points down.
-        if slant.abs() <= 1e-9 || slant.is_nan() || area2 == 0.0 || (toward > 0.0) != (area2 < 0.0) {
+        if slant.abs() <= 1e-9 || slant.is_nan() || area2 == 0.0 || (toward > 0.0) != (area2 < 0.0)
+        {
             return Err(Unsure::EdgeOn { face: fi as u32 });
         }
         let (lo, hi) = ring
@@ -216,7 +221,7 @@ pub fn carve(
         let fv = &faces[fi];
         let mut pieces: Vec<(Key, Key)> = Vec::new();
         // Pieces of the face's own edges inside the silhouette.
-        let mut along: HashMap<u32, Vec<u32>> = HashMap::new();
+        let mut along: Map<u32, Vec<u32>> = Map::default();
         for k in 0..f.len() {
             let (a, b) = (f[k], f[(k + 1) % f.len()]);
             let e = edge_ids[&(a.min(b), a.max(b))];
@@ -285,11 +290,14 @@ pub fn carve(
                 walls[g as usize].push((b, a));
             }
         }
-        for ring in link(&pieces)? {
-            let area2 = ring_area2(&ring, |k| keys.uv(*k, &uv, &crossings, &s));
-            if (area2 > 0.0) != (fv.sense > 0) {
-                return Err(Unsure::Hole);
-            }
+        // In the image with v mirrored for faces turned toward the camera, the face's
+        // outer rings turn counter-clockwise and its holes clockwise.
+        let mirror = DVec2::new(1.0, f64::from(fv.sense));
+        let rings = holes::without_holes(link(&pieces)?, |k| {
+            Keys::uv(*k, &uv, &crossings, &s) * mirror
+        })
+        .ok_or(Unsure::Hole)?;
+        for ring in rings {
             push_face(&mut out, &mut keys, &ring, mesh.makers[fi], |k| {
                 position(k, mesh, &crossings, &rays)
             });
@@ -318,16 +326,25 @@ pub fn carve(
         if pieces.is_empty() {
             continue;
         }
-        let rings = link(pieces)?;
-        let normal = s.wall_normal(camera, g as u32);
-        let mut sign = 0.0;
-        for ring in &rings {
-            let area = ring_vector_area(ring, |k| position(k, mesh, &crossings, &rays));
-            let d = area.dot(normal);
-            if sign != 0.0 && (d > 0.0) != (sign > 0.0) {
-                return Err(Unsure::Hole);
-            }
-            sign = d;
+        let mut rings = link(pieces)?;
+        if rings.len() > 1 {
+            // Outer rings turn like the largest ring; coordinates in the wall's plane
+            // that make them counter-clockwise.
+            let at = |k: &Key| position(k, mesh, &crossings, &rays);
+            let normal = s.wall_normal(camera, g as u32).normalize();
+            let largest = rings
+                .iter()
+                .map(|r| ring_vector_area(r, at).dot(normal))
+                .max_by(|a, b| a.abs().total_cmp(&b.abs()))
+                .unwrap_or(1.0);
+            let up = if largest > 0.0 { normal } else { -normal };
+            let e1 = up.any_orthonormal_vector();
+            let e2 = up.cross(e1);
+            rings = holes::without_holes(rings, |k| {
+                let p = at(k);
+                DVec2::new(p.dot(e1), p.dot(e2))
+            })
+            .ok_or(Unsure::Hole)?;
         }
         let (ring, edge) = s.ring_of[g];
         let maker = Maker::Wall { view, ring, edge };
@@ -385,11 +402,11 @@ struct FaceView {
 /// The result's vertices, numbered as they are first used.
 #[derive(Default)]
 struct Keys {
-    index: HashMap<Key, u32>,
+    index: Map<Key, u32>,
 }
 
 impl Keys {
-    fn uv(&self, k: Key, uv: &[DVec2], crossings: &[Crossing], s: &Flat) -> DVec2 {
+    fn uv(k: Key, uv: &[DVec2], crossings: &[Crossing], s: &Flat) -> DVec2 {
         match k {
             Key::Vertex(v) => uv[v as usize],
             Key::Cross(x) => crossings[x as usize].uv,
@@ -432,7 +449,7 @@ fn push_face(
 
 /// Directed pieces linked into rings: each point must start exactly one piece.
 fn link(pieces: &[(Key, Key)]) -> Result<Vec<Vec<Key>>, Unsure> {
-    let mut next: HashMap<Key, Key> = HashMap::with_capacity(pieces.len());
+    let mut next: Map<Key, Key> = Map::with_capacity_and_hasher(pieces.len(), Default::default());
     for &(a, b) in pieces {
         if next.insert(a, b).is_some() {
             return Err(Unsure::Tangled);
@@ -458,14 +475,6 @@ fn link(pieces: &[(Key, Key)]) -> Result<Vec<Vec<Key>>, Unsure> {
     Ok(rings)
 }
 
-/// Twice the signed area of a ring of image points.
-fn ring_area2<K>(ring: &[K], at: impl Fn(&K) -> DVec2) -> f64 {
-    let pts: Vec<DVec2> = ring.iter().map(at).collect();
-    (0..pts.len())
-        .map(|k| pts[k].perp_dot(pts[(k + 1) % pts.len()]))
-        .sum()
-}
-
 /// Twice the vector area of a ring of space points (Newell).
 fn ring_vector_area<K>(ring: &[K], at: impl Fn(&K) -> DVec3) -> DVec3 {
     let pts: Vec<DVec3> = ring.iter().map(at).collect();
@@ -481,7 +490,7 @@ fn newell(mesh: &Mesh, f: &[u32]) -> DVec3 {
 
 /// Every directed edge once, and its reverse once.
 fn check_closed(mesh: &Mesh) -> Result<(), Unsure> {
-    let mut seen = std::collections::HashSet::new();
+    let mut seen = Set::default();
     for f in &mesh.faces {
         for k in 0..f.len() {
             if !seen.insert((f[k], f[(k + 1) % f.len()])) {

@@ -5,6 +5,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::model::body::Body;
+use crate::model::boolean::Map;
 use crate::model::ids::Serials;
 use crate::model::solids::BuildError;
 
@@ -108,7 +109,7 @@ impl Mesh {
             }
             i
         }
-        let mut by_edge = std::collections::HashMap::new();
+        let mut by_edge = Map::default();
         for (i, f) in self.faces.iter().enumerate() {
             for k in 0..f.len() {
                 let (a, b) = (f[k], f[(k + 1) % f.len()]);
@@ -121,7 +122,7 @@ impl Mesh {
         let mut order: Vec<usize> = Vec::new();
         let mut piece_of = vec![usize::MAX; n];
         let mut pieces: Vec<Mesh> = Vec::new();
-        let mut index: Vec<std::collections::HashMap<u32, u32>> = Vec::new();
+        let mut index: Vec<Map<u32, u32>> = Vec::new();
         for i in 0..n {
             let r = root(&mut parent, i);
             if piece_of[r] == usize::MAX {

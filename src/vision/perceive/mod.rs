@@ -21,6 +21,7 @@
 pub mod bound;
 pub mod carve;
 pub mod cone;
+pub mod holes;
 pub mod mesh;
 pub mod silhouette;
 #[cfg(test)]
@@ -118,7 +119,10 @@ pub fn visual_hull(
             .ok_or(PerceiveError::NoArea { view: s.view })?;
         frustums.push(f);
     }
-    let Some(start) = bound::intersect(&frustums) else {
+    let Some((first, others)) = frustums.split_first() else {
+        return Ok(Vec::new());
+    };
+    let Some(start) = bound::start(first, others) else {
         return Ok(Vec::new());
     };
     let mut pieces = vec![start];

@@ -239,7 +239,8 @@ fn an_l_prism_keeps_its_notch_where_a_view_sees_into_it() {
         (DVec3::new(-0.1, -0.1, -0.05), DVec3::new(0.1, 0.0, 0.05)),
         (DVec3::new(-0.1, 0.0, -0.05), DVec3::new(0.0, 0.1, 0.05)),
     ]);
-    let (pieces, _) = hull(&solid, &cameras(8, 0.7, 450.0));
+    let (pieces, tally) = hull(&solid, &cameras(8, 0.7, 450.0));
+    assert_eq!(tally.boolean, 0, "{tally:?}");
     assert_valid_and_holding(&pieces, &solid);
     let notch = DVec3::new(0.07, 0.07, 0.0);
     let w: f64 = pieces.iter().map(|p| winding(p, notch)).sum();
@@ -258,7 +259,8 @@ fn a_frame_seen_through_its_hole_keeps_the_hole() {
         ),
         (DVec3::new(0.05, -0.05, -0.02), DVec3::new(0.1, 0.05, 0.02)),
     ]);
-    let (pieces, _) = hull(&solid, &cameras(12, 0.7, 450.0));
+    let (pieces, tally) = hull(&solid, &cameras(12, 0.7, 450.0));
+    assert_eq!(tally.boolean, 0, "{tally:?}");
     assert_valid_and_holding(&pieces, &solid);
     let w: f64 = pieces.iter().map(|p| winding(p, DVec3::ZERO)).sum();
     assert!(w.abs() < 1e-6, "the hole is filled: winding {w}");
