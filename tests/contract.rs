@@ -583,6 +583,7 @@ fn answers_match_the_contract() {
     spatial(&c);
     camera_solution(&c);
     recognition(&c);
+    perception(&c);
     lights(&c);
     deletes(&c);
     booleans(&c);
@@ -1579,6 +1580,65 @@ fn recognition(c: &Contract) {
         Spec::Either,
     );
     assert_eq!(p["type"], "urn:winged:problem:invalid-depth", "{p}");
+}
+
+fn perception(c: &Contract) {
+    use base64::Engine as _;
+    let path = "/v1/perception";
+    let eye = c.ok("GET", "/v1/cameras/{name}", "/v1/cameras/eye", None);
+    let size = |k: &str| eye["intrinsics"][k].as_u64().expect("a size") as u32;
+    let (w, h) = (size("width"), size("height"));
+    // A mask: a rectangle in the middle of the picture (or nothing).
+    let mask = |width: u32, height: u32, filled: bool| {
+        let pixels: Vec<u8> = (0..height)
+            .flat_map(|y| {
+                (0..width).map(move |x| {
+                    let inside = x > width * 2 / 5 && x < width * 3 / 5 && y > height / 3 && y < height * 2 / 3;
+                    if filled && inside { 255 } else { 0 }
+                })
+            })
+            .collect();
+        let mut png = Vec::new();
+        let mut encoder = png::Encoder::new(&mut png, width, height);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder
+            .write_header()
+            .expect("a header")
+            .write_image_data(&pixels)
+            .expect("pixels");
+        base64::engine::general_purpose::STANDARD.encode(png)
+    };
+    let view = json!({"camera": "eye", "mask": mask(w, h, true)});
+    let made = c.ok(
+        "POST",
+        path,
+        path,
+        Some(json!({"views": [view.clone()], "name": "seen-there", "far": 3.0})),
+    );
+    let id = made["inserted"][0]["id"].as_u64().expect("a new body");
+    let body = c.ok("GET", "/v1/bodies/{id}", &format!("/v1/bodies/{id}"), None);
+    assert_eq!(body["provisional"], true, "{body}");
+    assert_eq!(body["views"], 1, "{body}");
+    let carved = c.ok(
+        "POST",
+        path,
+        path,
+        Some(json!({"views": [view], "body": id, "far": 3.0})),
+    );
+    assert_eq!(carved["carved"][0]["id"], id, "{carved}");
+    assert_eq!(carved["carved"][0]["views"], 2, "{carved}");
+    let before = c.revision();
+    for (refused, status) in [
+        (json!({"views": [{"camera": "eye", "mask": mask(8, 8, true)}]}), 422),
+        (json!({"views": [{"camera": "eye", "mask": mask(w, h, false)}]}), 422),
+        (json!({"views": [{"camera": "eye"}]}), 400),
+        (json!({"views": [{"camera": "nobody", "mask": mask(8, 8, true)}]}), 404),
+        (json!({"views": [{"camera": "eye", "mask": "not base64!"}]}), 400),
+        (json!({"views": []}), 422),
+    ] {
+        c.refused_json("POST", path, path, refused, status, Spec::Either);
+    }
+    assert_eq!(c.revision(), before, "refusals change nothing");
 }
 
 fn camera_solution(c: &Contract) {

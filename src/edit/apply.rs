@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::command::{
     BooleanPiece, CameraSpec, CameraSpecError, CreateBody, EulerOp, LightSpec, Motion, Move,
-    PatchBody, Shape, Sweep, SweepKind,
+    PatchBody, PerceivedPiece, Shape, Sweep, SweepKind,
 };
 use super::plan::{Prepared, prepare};
 use crate::model::boolean::Op;
@@ -22,8 +22,8 @@ use crate::model::solids::{
     sphere, torus,
 };
 use crate::model::{
-    Body, BodyId, Built, EdgeId, Entity, EulerError, FaceId, LightError, Pose, Serial, Transform,
-    VertexId, World, WorldError,
+    Body, BodyId, Built, EdgeId, Entity, EulerError, FaceId, LightError, PerceivedShell, Pose,
+    Serial, Transform, VertexId, World, WorldError,
 };
 
 pub use super::command::MAX_BODY_FACES;
@@ -147,6 +147,15 @@ pub enum Edit {
         /// The result's shells, the first replacing `body`'s polyhedron.
         pieces: Vec<BooleanPiece>,
     },
+    /// Perception's result as geometry: provisional bodies inserted or carved again,
+    /// and those carved to nothing removed, all or none. Applying it runs no carving.
+    Perception {
+        /// Bodies inserted or carved again, in the order the answer lists them.
+        pieces: Vec<PerceivedPiece>,
+        /// Provisional bodies carved to nothing.
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        removed: Vec<u64>,
+    },
 }
 
 impl Edit {
@@ -168,6 +177,7 @@ impl Edit {
             Edit::PutLight { .. } => "put_light",
             Edit::DeleteLight { .. } => "delete_light",
             Edit::Boolean { .. } | Edit::BooleanResult { .. } => "boolean",
+            Edit::Perception { .. } => "perception",
         }
     }
 }
@@ -588,7 +598,59 @@ pub(super) fn apply_prepared(
             pieces,
             ..
         } => super::boolean::replay(world, *body, *with, *keep_with, pieces),
+        Edit::Perception { pieces, removed } => perception(world, pieces, removed),
     }
+}
+
+/// Places perception's result on a copy of the world that replaces it only when every
+/// piece was placed: a refusal leaves the world as it was.
+fn perception(
+    world: &mut World,
+    pieces: &[PerceivedPiece],
+    removed: &[u64],
+) -> Result<Outcome, EditError> {
+    let mut next = world.clone();
+    let mut killed = Vec::new();
+    for &id in removed {
+        let b = body_id(&next, id)?;
+        if next.perceived(b).is_none() {
+            return Err(WorldError::NotProvisional(b).into());
+        }
+        killed.extend(next.kill(b)?.ids().map(|b| b.get()));
+    }
+    let mut placed = Vec::with_capacity(pieces.len());
+    for piece in pieces {
+        let faces: Vec<Vec<u32>> = piece.faces.iter().map(<[u32]>::to_vec).collect();
+        let shell = PerceivedShell {
+            positions: &piece.positions,
+            faces: &faces,
+            makers: &piece.makers,
+            views: piece.views,
+        };
+        let b = match piece.body {
+            Some(id) => {
+                let b = body_id(&next, id)?;
+                next.recarve_perceived(b, &shell)?;
+                b
+            }
+            None => next.insert_perceived(piece.name.as_deref(), &shell)?,
+        };
+        let body = body_of(&next, b);
+        placed.push(PieceOutcome {
+            id: b.get(),
+            faces: body.face_count(),
+            edges: body.edge_count(),
+            vertices: body.vertex_count(),
+            volume: body.volume(),
+            sources: Vec::new(),
+        });
+    }
+    *world = next;
+    Ok(Outcome {
+        pieces: Some(placed),
+        killed,
+        ..Outcome::default()
+    })
 }
 
 /// The body `req` asks for, built and checked apart from any world (see [`Built`]),

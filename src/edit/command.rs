@@ -20,7 +20,8 @@ use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::model::{
-    BaumgartRaster, Camera, Color, Frame, Intrinsics, Light, LightError, Pose, camera::CameraError,
+    BaumgartRaster, Camera, Color, Frame, Intrinsics, Light, LightError, Maker, Pose,
+    camera::CameraError,
 };
 pub use face_list::FaceList;
 
@@ -161,6 +162,27 @@ pub struct BooleanPiece {
     pub positions: Vec<DVec3>,
     /// Faces as vertex indices.
     pub faces: FaceList,
+}
+
+/// One body perception carved, as the journal keeps it (see
+/// [`Edit::Perception`](super::Edit::Perception)): polygons and what made each face.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PerceivedPiece {
+    /// The provisional body carved again; `None` for a new body.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub body: Option<u64>,
+    /// A new body's name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Views that carved it, over every request.
+    pub views: u32,
+    /// Vertex loci: world coordinates for a new body (placed under the world with the
+    /// identity pose), the body's own frame for one carved again.
+    pub positions: Vec<DVec3>,
+    /// Faces as vertex indices, counter-clockwise seen from outside.
+    pub faces: FaceList,
+    /// What made each face.
+    pub makers: Vec<Maker>,
 }
 
 /// Make a body.

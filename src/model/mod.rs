@@ -18,6 +18,7 @@ pub mod euler;
 pub mod geometry;
 pub mod ids;
 pub mod parts;
+pub mod perceived;
 pub mod pose;
 pub mod range;
 pub mod solids;
@@ -32,11 +33,12 @@ pub use euler::EulerError;
 pub use geometry::{Bounds, Plane};
 pub use ids::{EdgeId, FaceId, Serial, Serials, Side, VertexId};
 pub use parts::{BodyId, BodyNode, Color, Entity, PartsTree, Size};
+pub use perceived::{Maker, Perceived};
 pub use pose::{Pose, PoseError};
 pub use range::RangeError;
 pub use topology::{Around, EdgeUse, Link};
 pub use transform::{Frame, Moves, Transform, TransformError};
 pub use world::{
-    BooleanBasis, BooleanOutcome, Built, Entangled, Killed, Named, Piece, Register, ShellRef,
-    UngluedBodies, World, WorldError,
+    BooleanBasis, BooleanOutcome, Built, Entangled, Killed, Named, PerceivedShell, Piece, Register,
+    ShellRef, UngluedBodies, World, WorldError,
 };

@@ -25,6 +25,7 @@ use serde::{Deserialize, Serialize};
 
 use super::body::Body;
 use super::ids::{EdgeId, FaceId, Serial, VertexId};
+use super::perceived::Perceived;
 use super::pose::Pose;
 
 /// A body's id: its serial number, taken from the same world-wide counter as its faces,
@@ -89,6 +90,9 @@ pub struct BodyNode {
     /// The material colour appearance renders the body's faces with; `None` for the
     /// default (a colour chosen from the body's id).
     pub color: Option<Color>,
+    /// For a provisional body that perception made: the views that carved it and what
+    /// made each face; `None` for an ordinary body.
+    pub perceived: Option<Arc<Perceived>>,
 }
 
 /// A material colour: 8-bit sRGB red, green and blue.
@@ -296,6 +300,7 @@ impl PartsTree {
                 pose: Pose::IDENTITY,
                 body: Arc::new(Body::empty()),
                 color: None,
+                perceived: None,
             },
         );
         let mut names = OrdMap::new();
@@ -535,6 +540,7 @@ impl PartsTree {
                 pose,
                 body,
                 color: None,
+                perceived: None,
             },
         );
     }

@@ -160,6 +160,10 @@ pub fn before(world: &World, edit: &Edit) -> Before {
             suparts: supart(*body).chain(supart(*with)).collect(),
             existed: false,
         },
+        Edit::Perception { removed, .. } => Before {
+            suparts: removed.iter().flat_map(|&b| supart(b)).collect(),
+            existed: false,
+        },
         Edit::PutCamera { name, .. } => Before {
             suparts: Vec::new(),
             existed: world.camera(name).is_some(),
@@ -290,6 +294,29 @@ pub fn describe(
         }
         Edit::DeleteLight { name } => {
             changes.push(EntityChange::named(Removed, Kind::Light, name));
+        }
+        Edit::Perception { pieces, .. } => {
+            // New bodies go under the world; removed ones were provisional bodies there
+            // or wherever a user moved them.
+            let mut suparts = Vec::new();
+            let placed = outcome.pieces.as_deref().unwrap_or_default();
+            for (piece, p) in pieces.iter().zip(placed) {
+                if piece.body.is_some() {
+                    changes.push(EntityChange::body(Updated, p.id, &[Field::Topology]));
+                } else {
+                    changes.push(EntityChange::body(Added, p.id, &[]));
+                    suparts.extend(after.supart(BodyId(Serial(p.id))).map(|s| s.get()));
+                }
+            }
+            for &k in &outcome.killed {
+                changes.push(EntityChange::body(Removed, k, &[]));
+                suparts.extend(before.supart_of(k));
+            }
+            suparts.sort_unstable();
+            suparts.dedup();
+            for s in suparts {
+                parts_of(&mut changes, Some(s));
+            }
         }
     }
     Change {

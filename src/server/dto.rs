@@ -251,6 +251,12 @@ pub struct BodyDto {
     pub area: f64,
     /// Bounds in the body frame; `null` for a body without vertices.
     pub bounds: Option<BoundsDto>,
+    /// Whether perception made the body and may carve it further.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub provisional: bool,
+    /// For a provisional body: how many views carved it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub views: Option<u32>,
 }
 
 /// Counts of a body, for summaries.
@@ -309,6 +315,9 @@ pub struct FaceDto {
     pub plane: Option<[f64; 4]>,
     /// The perimeter's vertex ids, counter-clockwise seen from outside.
     pub vertices: Vec<u64>,
+    /// For a face of a provisional body: the view (and silhouette edge) that made it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub made_by: Option<crate::model::Maker>,
 }
 
 /// `GET /v1/bodies/{id}/topology`.

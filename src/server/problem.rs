@@ -276,6 +276,9 @@ fn world_problem(w: WorldError, detail: String) -> Problem {
         }
         WorldError::TooLarge { .. } => too_large(detail),
         WorldError::BooleanFailed(_) => Problem::internal(detail),
+        WorldError::NotProvisional(_) => {
+            unprocessable("not-provisional", "Body not provisional", detail)
+        }
     }
 }
 

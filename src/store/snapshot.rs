@@ -36,9 +36,10 @@ use super::error::StoreError;
 /// The first bytes of every snapshot file.
 pub const MAGIC: [u8; 8] = *b"WINGSNAP";
 /// The snapshot format this build writes and reads. Version 2 added bodies' material
-/// colours; a version-1 snapshot is refused, and recovery falls back to an older snapshot
-/// or to replaying the journal (whose entries are version-independent JSON edits).
-pub const FORMAT_VERSION: u32 = 2;
+/// colours, version 3 the records of provisional bodies perception made; an older
+/// snapshot is refused, and recovery falls back to an older snapshot or to replaying the
+/// journal (whose entries are version-independent JSON edits).
+pub const FORMAT_VERSION: u32 = 3;
 /// How many snapshots are kept; older ones are deleted after a new one is written.
 pub const KEEP: usize = 2;
 /// The snapshot directory's name inside a data directory.

@@ -51,12 +51,14 @@ mod boolean;
 mod glue;
 mod insert;
 mod named;
+mod perceived;
 mod read;
 mod tree;
 
 pub use boolean::{BooleanBasis, BooleanOutcome, Entangled, Piece, ShellRef};
 pub use insert::Built;
 pub use named::{Named, Register};
+pub use perceived::PerceivedShell;
 
 /// Why a world operation was refused. The world is unchanged.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -155,6 +157,10 @@ pub enum WorldError {
     /// The boolean kernel failed (panicked); nothing was changed.
     #[error("{0}")]
     BooleanFailed(String),
+    /// Perception was asked to carve a body that it did not make (or that was made an
+    /// ordinary body since).
+    #[error("body {0} is not provisional: only bodies perception made can be carved by views")]
+    NotProvisional(BodyId),
     /// The result of a write would have more faces than one write may make.
     #[error("the result would have {faces} faces; at most {max} are allowed per request")]
     TooLarge {

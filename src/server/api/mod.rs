@@ -12,6 +12,7 @@ mod feed;
 mod model;
 mod named;
 mod ops;
+mod perception;
 pub mod precondition;
 mod recognition;
 pub mod spatial;
@@ -127,6 +128,7 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
             reads(post(camera_solution::camera_solution)),
         )
         .route("/v1/recognition", reads(post(recognition::recognition)))
+        .route("/v1/perception", writes(post(perception::perception)))
         .route(
             "/v1/cameras/{name}",
             reads(get(named::get_one::<Camera>)).merge(writes(

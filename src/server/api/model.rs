@@ -58,6 +58,8 @@ fn body_dto(w: &World, b: BodyId) -> Option<BodyDto> {
         volume: body.volume(),
         area: body.surface_area(),
         bounds: body.bounds().map(Into::into),
+        provisional: node.perceived.is_some(),
+        views: node.perceived.as_ref().map(|p| p.views),
     })
 }
 
@@ -136,6 +138,7 @@ pub(super) async fn topology(
 
 fn topology_dto(w: &World, b: BodyId) -> TopologyDto {
     let body = w.body(b).expect("checked by the caller");
+    let perceived = w.perceived(b);
     let es = |e: crate::model::EdgeId| {
         if e.is_none() {
             None
@@ -182,6 +185,7 @@ fn topology_dto(w: &World, b: BodyId) -> TopologyDto {
                 .face_vertices(f)
                 .map(|v| body.vertex_serial(v).get())
                 .collect(),
+            made_by: perceived.and_then(|p| p.maker(body.face_serial(f))),
         })
         .collect();
     TopologyDto {

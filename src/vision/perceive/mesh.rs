@@ -2,56 +2,13 @@
 //! carves, before it becomes a winged-edge [`Body`].
 
 use glam::DVec3;
-use serde::{Deserialize, Serialize};
 
 use crate::model::body::Body;
 use crate::model::boolean::Map;
-use crate::model::ids::Serials;
+use crate::model::ids::{Serial, Serials, VertexId};
 use crate::model::solids::BuildError;
 
-/// What made a face of a perceived body.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "lowercase")]
-pub enum Maker {
-    /// A wall of a view's cone: the plane through the camera's centre and one edge of a
-    /// silhouette ring (`ring` 0 is the outer boundary, then the holes; `edge` `k` runs
-    /// from the ring's point `k` to point `k + 1`).
-    Wall {
-        /// The view, numbered across every request that carved the body.
-        view: u32,
-        /// The silhouette ring.
-        ring: u32,
-        /// The edge of that ring.
-        edge: u32,
-    },
-    /// The plane at a view's `near` depth.
-    Near {
-        /// The view.
-        view: u32,
-    },
-    /// The plane at a view's `far` depth.
-    Far {
-        /// The view.
-        view: u32,
-    },
-    /// A face of the convex bound carving starts from; a complete carving leaves none.
-    Bound {
-        /// The view whose (dilated) silhouette hull the face bounds.
-        view: u32,
-    },
-}
-
-impl Maker {
-    /// The view that made the face.
-    pub fn view(&self) -> u32 {
-        match *self {
-            Maker::Wall { view, .. }
-            | Maker::Near { view }
-            | Maker::Far { view }
-            | Maker::Bound { view } => view,
-        }
-    }
-}
+pub use crate::model::perceived::Maker;
 
 /// A closed polyhedron as polygons.
 ///
@@ -81,6 +38,34 @@ impl Mesh {
             }
         }
         six / 6.0
+    }
+
+    /// The faces of `body` (one ring each, counter-clockwise seen from outside), in the
+    /// order of their serials, their vertices placed by `place` (e.g. into the world's
+    /// frame), each face made by what `maker` says of its serial.
+    pub fn of_body(
+        body: &Body,
+        place: impl Fn(DVec3) -> DVec3,
+        maker: impl Fn(Serial) -> Maker,
+    ) -> Mesh {
+        let mut faces: Vec<_> = body.faces().collect();
+        faces.sort_by_key(|&f| body.face_serial(f));
+        let mut index: Map<VertexId, u32> = Map::default();
+        let mut mesh = Mesh::default();
+        for f in faces {
+            let ring = body
+                .face_vertices(f)
+                .map(|v| {
+                    *index.entry(v).or_insert_with(|| {
+                        mesh.positions.push(place(body.position(v)));
+                        (mesh.positions.len() - 1) as u32
+                    })
+                })
+                .collect();
+            mesh.faces.push(ring);
+            mesh.makers.push(maker(body.face_serial(f)));
+        }
+        mesh
     }
 
     /// The winged-edge body of these polygons (refused as [`Body::from_polygons`]

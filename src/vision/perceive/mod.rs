@@ -15,6 +15,10 @@
 //!   image; where that meets a degenerate configuration, [`carve_by`] takes the general
 //!   boolean of the polyhedron and the view's cone instead.
 //!
+//! * [`occlusion`]: pixels a modeled body covers next to a silhouette join it, so that a
+//!   view does not carve away what a known body hides.
+//! * [`views`]: a request's views (cameras and masks) to bodies.
+//!
 //! Every face of a result records the view and the silhouette edge that made it
 //! ([`Maker`]).
 
@@ -23,14 +27,17 @@ pub mod carve;
 pub mod cone;
 pub mod holes;
 pub mod mesh;
+pub mod occlusion;
 pub mod silhouette;
 #[cfg(test)]
 mod tests;
+pub mod views;
 
 use glam::DAffine3;
 
 pub use carve::{Outline, Unsure};
 pub use mesh::{Maker, Mesh};
+pub use views::{MaskView, PerceiveOptions, ViewsError, carve_body, new_bodies, sights};
 
 use crate::model::boolean::{self, BooleanError, Op, Operand, Which};
 use crate::model::camera::Camera;
@@ -114,8 +121,8 @@ pub fn visual_hull(
 ) -> Result<Vec<Mesh>, PerceiveError> {
     let mut frustums = Vec::with_capacity(sights.len());
     for s in sights {
-        let outer = s.outline.rings.first().map(Vec::as_slice).unwrap_or(&[]);
-        let f = bound::frustum(&s.camera, outer, depths.near, depths.far, s.view)
+        let points: Vec<glam::DVec2> = s.outline.rings.iter().flatten().copied().collect();
+        let f = bound::frustum(&s.camera, &points, depths.near, depths.far, s.view)
             .ok_or(PerceiveError::NoArea { view: s.view })?;
         frustums.push(f);
     }
@@ -175,26 +182,38 @@ fn within(mesh: &Mesh, camera: &Camera, depths: Depths) -> bool {
     })
 }
 
-/// `mesh ∩ cone(outer ring) − cone(each hole)`, by the general boolean.
+/// `mesh ∩ cone(each outer ring) − cone(each hole)`, by the general boolean. Outer
+/// rings (turning from +u toward +v) bound disjoint regions, so their cones are
+/// disjoint and each gives its own pieces.
 fn carve_by_boolean(
     mesh: &Mesh,
     sight: &Sight,
     depths: Depths,
 ) -> Result<Vec<Mesh>, PerceiveError> {
     let view = sight.view;
-    let mut pieces = vec![mesh.clone()];
+    let area = |ring: &[glam::DVec2]| -> f64 {
+        (0..ring.len())
+            .map(|k| ring[k].perp_dot(ring[(k + 1) % ring.len()]))
+            .sum()
+    };
+    let mut pieces = Vec::new();
     for (r, ring) in sight.outline.rings.iter().enumerate() {
-        let (op, near, far) = if r == 0 {
-            (Op::Intersection, depths.near, depths.far)
-        } else {
-            (Op::Difference, depths.near * 0.5, depths.far * 2.0)
-        };
-        let tool = cone::cone(&sight.camera, ring, near, far, view, r as u32);
-        let mut next = Vec::new();
-        for piece in &pieces {
-            next.extend(boolean_of(piece, &tool, op, view)?);
+        if area(ring) > 0.0 {
+            let tool = cone::cone(&sight.camera, ring, depths.near, depths.far, view, r as u32);
+            pieces.extend(boolean_of(mesh, &tool, Op::Intersection, view)?);
         }
-        pieces = next;
+    }
+    for (r, ring) in sight.outline.rings.iter().enumerate() {
+        if area(ring) < 0.0 {
+            // Longer than the outer cones, so that it cuts through their ends.
+            let (near, far) = (depths.near * 0.5, depths.far * 2.0);
+            let tool = cone::cone(&sight.camera, ring, near, far, view, r as u32);
+            let mut next = Vec::new();
+            for piece in &pieces {
+                next.extend(boolean_of(piece, &tool, Op::Difference, view)?);
+            }
+            pieces = next;
+        }
     }
     Ok(pieces)
 }
