@@ -1593,7 +1593,10 @@ fn perception(c: &Contract) {
         let pixels: Vec<u8> = (0..height)
             .flat_map(|y| {
                 (0..width).map(move |x| {
-                    let inside = x > width * 2 / 5 && x < width * 3 / 5 && y > height / 3 && y < height * 2 / 3;
+                    let inside = x > width * 2 / 5
+                        && x < width * 3 / 5
+                        && y > height / 3
+                        && y < height * 2 / 3;
                     if filled && inside { 255 } else { 0 }
                 })
             })
@@ -1629,11 +1632,23 @@ fn perception(c: &Contract) {
     assert_eq!(carved["carved"][0]["views"], 2, "{carved}");
     let before = c.revision();
     for (refused, status) in [
-        (json!({"views": [{"camera": "eye", "mask": mask(8, 8, true)}]}), 422),
-        (json!({"views": [{"camera": "eye", "mask": mask(w, h, false)}]}), 422),
+        (
+            json!({"views": [{"camera": "eye", "mask": mask(8, 8, true)}]}),
+            422,
+        ),
+        (
+            json!({"views": [{"camera": "eye", "mask": mask(w, h, false)}]}),
+            422,
+        ),
         (json!({"views": [{"camera": "eye"}]}), 400),
-        (json!({"views": [{"camera": "nobody", "mask": mask(8, 8, true)}]}), 404),
-        (json!({"views": [{"camera": "eye", "mask": "not base64!"}]}), 400),
+        (
+            json!({"views": [{"camera": "nobody", "mask": mask(8, 8, true)}]}),
+            404,
+        ),
+        (
+            json!({"views": [{"camera": "eye", "mask": "not base64!"}]}),
+            400,
+        ),
         (json!({"views": []}), 422),
     ] {
         c.refused_json("POST", path, path, refused, status, Spec::Either);

@@ -626,6 +626,7 @@ fn perception(
             faces: &faces,
             makers: &piece.makers,
             views: piece.views,
+            outline_px: piece.outline_px,
         };
         let b = match piece.body {
             Some(id) => {

@@ -176,6 +176,10 @@ pub struct PerceivedPiece {
     pub name: Option<String>,
     /// Views that carved it, over every request.
     pub views: u32,
+    /// How far, in pixels, its outline may lie outside the object's in the views that
+    /// carved it.
+    #[serde(default)]
+    pub outline_px: f64,
     /// Vertex loci: world coordinates for a new body (placed under the world with the
     /// identity pose), the body's own frame for one carved again.
     pub positions: Vec<DVec3>,

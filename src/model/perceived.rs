@@ -62,6 +62,10 @@ impl Maker {
 pub struct Perceived {
     /// Views that carved the body, over every request (views are numbered from 0).
     pub views: u32,
+    /// How far, in pixels, the body's outline may lie outside the object's in the views
+    /// that carved it: the silhouettes were widened by this much (the request's
+    /// tolerance and the outward simplification of the traced outline).
+    pub outline_px: f64,
     /// Each face's serial and its maker, by serial.
     pub makers: Vec<(Serial, Maker)>,
 }

@@ -31,6 +31,12 @@ pub struct SceneBody {
     pub name: Option<String>,
     /// Its material colour (the body's own, or [`default_color`] of its id).
     pub color: Color,
+    /// Whether perception made it: a visual hull, whose only edges that the object
+    /// shows are its outline (see [`crate::model::Perceived`]).
+    pub provisional: bool,
+    /// For a provisional body, how far its outline may lie outside the object's, in
+    /// pixels; 0 for an ordinary body.
+    pub outline_px: f64,
 }
 
 /// One face: its body, serial, plane and perimeter.
@@ -315,6 +321,8 @@ fn piece(world: &World, id: BodyId, ear: &mut earcut::Earcut<f64>) -> Piece {
             id,
             name: node.name.clone(),
             color: node.color.unwrap_or_else(|| default_color(id)),
+            provisional: node.perceived.is_some(),
+            outline_px: node.perceived.as_ref().map_or(0.0, |p| p.outline_px),
         }),
         ..Piece::default()
     };

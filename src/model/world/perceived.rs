@@ -24,6 +24,8 @@ pub struct PerceivedShell<'a> {
     pub makers: &'a [Maker],
     /// Views that carved it, over every request.
     pub views: u32,
+    /// How far its outline may lie outside the object's (see [`Perceived::outline_px`]).
+    pub outline_px: f64,
 }
 
 impl PerceivedShell<'_> {
@@ -50,6 +52,7 @@ impl PerceivedShell<'_> {
         serials.sort_unstable();
         Perceived {
             views: self.views,
+            outline_px: self.outline_px,
             makers: serials
                 .into_iter()
                 .zip(self.makers.iter().copied())

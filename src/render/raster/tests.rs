@@ -826,6 +826,8 @@ fn ids_refuses_more_than_65535_bodies() {
             id: BodyId(crate::model::Serial(i as u64 + 1)),
             name: None,
             color: Color([0; 3]),
+            provisional: false,
+            outline_px: 0.0,
         });
         scene.faces.push(SceneFace {
             body: i as u32,

@@ -54,6 +54,7 @@ use crate::server::actor::Applied;
 use crate::server::limits::{ImageLimits, decode_depth_png, decode_png};
 use crate::server::problem::Problem;
 use crate::vision::image::{Luma, Mask};
+use crate::vision::perceive::silhouette::SIMPLIFY_PX;
 use crate::vision::perceive::{
     Depths, MaskView, Mesh, PerceiveOptions, Tally, ViewsError, carve_body, new_bodies, sights,
 };
@@ -319,24 +320,37 @@ fn run(
         });
     }
     let first = existing.map_or(0, |(_, views)| views);
-    let sights = sights(&views, Some(scene), options, first).map_err(views_problem)?;
-    let mut tally = Tally::default();
-    let pieces = match existing {
-        None => new_bodies(&sights, options.depths, &mut tally).map_err(views_problem)?,
+    let start = match existing {
+        None => None,
         Some((b, _)) => {
             let node = world
                 .node(b)
                 .ok_or_else(|| Problem::not_found(format!("body {b}")))?;
             let pose = world.world_pose(b).unwrap_or(node.pose);
             let record = node.perceived.clone().unwrap_or_default();
-            let mesh = Mesh::of_body(
+            Some(Mesh::of_body(
                 &node.body,
                 |p| pose.transform_point(p),
                 |s| record.maker(s).unwrap_or(Maker::Unrecorded),
-            );
-            carve_body(mesh, &sights, options.depths, &mut tally)
-                .map_err(|e| views_problem(e.into()))?
+            ))
         }
+    };
+    let mut tally = Tally::default();
+    let carve = |hull: Option<&[Mesh]>, tally: &mut Tally| -> Result<Vec<Mesh>, Problem> {
+        let sights = sights(&views, Some(scene), hull, options, first).map_err(views_problem)?;
+        match &start {
+            None => new_bodies(&sights, options.depths, tally).map_err(views_problem),
+            Some(mesh) => carve_body(mesh.clone(), &sights, options.depths, tally)
+                .map_err(|e| views_problem(e.into())),
+        }
+    };
+    // Every covering body next to a silhouette first; then only those in front of what
+    // that carving left (see `vision::perceive::occlusion`).
+    let first_pass = carve(None, &mut tally)?;
+    let pieces = if first_pass.is_empty() {
+        first_pass
+    } else {
+        carve(Some(&first_pass), &mut tally)?
     };
     Ok(Carved { pieces, tally })
 }
@@ -395,12 +409,17 @@ pub(super) async fn perception(State(state): State<AppState>, req: Request) -> A
     drop(_turn);
 
     let views_after = existing.map_or(0, |(_, v)| v) + views_given;
+    let earlier_outline = existing
+        .and_then(|(b, _)| world.perceived(b))
+        .map_or(0.0, |p| p.outline_px);
+    let outline_px = (options.tolerance_px + SIMPLIFY_PX).max(earlier_outline);
     let (edit, expected) = edit_of(
         &world,
         &carved.pieces,
         existing,
         name.as_deref(),
         views_after,
+        outline_px,
     )?;
     let Applied {
         revision, outcome, ..
@@ -431,6 +450,7 @@ fn edit_of(
     existing: Option<(BodyId, u32)>,
     name: Option<&str>,
     views: u32,
+    outline_px: f64,
 ) -> Result<(Edit, Option<u64>), Problem> {
     let piece =
         |mesh: &Mesh, body: Option<u64>, name: Option<String>, place: &dyn Fn(DVec3) -> DVec3| {
@@ -442,6 +462,7 @@ fn edit_of(
                 body,
                 name,
                 views,
+                outline_px,
                 positions: mesh.positions.iter().map(|&p| place(p)).collect(),
                 faces,
                 makers: mesh.makers.clone(),

@@ -81,11 +81,13 @@ pub enum ViewsError {
 }
 
 /// The sights of `views`, numbered from `first`: each mask widened by what `occluders`
-/// covers next to it (see [`occlusion`]), then traced (see [`silhouettes`]); every region
-/// of a view goes into its outline.
+/// covers next to it (with `hull`, a solid holding the object, only where the covering
+/// surface is nearer than the hull's far side; see [`occlusion`]), then traced (see
+/// [`silhouettes`]); every region of a view goes into its outline.
 pub fn sights(
     views: &[MaskView],
     occluders: Option<&Scene>,
+    hull: Option<&[Mesh]>,
     options: &PerceiveOptions,
     first: u32,
 ) -> Result<Vec<Sight>, ViewsError> {
@@ -110,7 +112,7 @@ pub fn sights(
             return Err(empty);
         }
         let mask = match occluders {
-            Some(scene) => occlusion::with_occluders(&v.mask, scene, &v.camera),
+            Some(scene) => occlusion::with_occluders(&v.mask, scene, &v.camera, hull),
             None => v.mask.clone(),
         };
         let regions = silhouettes(&mask, options.tolerance_px, options.min_area_px);

@@ -80,10 +80,10 @@ use crate::camera::{Camera, DEFAULT_NEAR, View};
 use glam::DVec3;
 
 use crate::model::BodyId;
-use crate::render::Scene;
 use crate::render::hidden::{Segment, hidden_lines};
-use crate::render::raster::{Frame, Shading, rasterize, shaded};
-use crate::vision::image::{ContourOptions, Luma, Mask, Region, trace_regions};
+use crate::render::raster::{Frame, NO_FACE, Shading, rasterize, shaded};
+use crate::render::{Scene, SceneBody};
+use crate::vision::image::{ContourOptions, EdgeMap, Luma, Mask, Region, trace_regions};
 use crate::vision::solve::align::{AlignOptions, EdgePyramid, Motion};
 
 pub use depth::{DepthError, DepthImage, DepthTolerance, Reading};
@@ -377,7 +377,8 @@ fn depth_counts(
 /// `eye`, without the pieces of smooth edges: edges between two faces turned toward the
 /// eye whose normals are within the angle of cosine `smooth_cos` (the sides of a
 /// many-sided cylinder). Their two faces are lit almost alike, so a picture shows them
-/// faintly or not at all, and their absence says nothing.
+/// faintly or not at all, and their absence says nothing. Of a provisional body (a
+/// visual hull), only the outline is kept: its other edges are where cones met.
 fn pieces_by_body(
     scene: &Scene,
     segments: &[Segment],
@@ -395,13 +396,64 @@ fn pieces_by_body(
             f.faces_toward(eye) && g.faces_toward(eye) && f.normal.dot(g.normal) > smooth_cos
         })
     };
+    // A provisional body is a visual hull: its edges between two faces turned toward
+    // the eye are where cones met, not edges the object shows; only its outline is.
+    let inner = |s: &Segment| {
+        faces.get(&(s.body.get(), s.edge)).is_some_and(|&[f, g]| {
+            let (f, g) = (&scene.faces[f as usize], &scene.faces[g as usize]);
+            scene.bodies[f.body as usize].provisional && f.faces_toward(eye) && g.faces_toward(eye)
+        })
+    };
     let mut by_body = vec![Vec::new(); scene.bodies.len()];
-    for s in segments.iter().filter(|s| !smooth(s)) {
+    for s in segments.iter().filter(|s| !smooth(s) && !inner(s)) {
         if let Ok(b) = scene.bodies.binary_search_by_key(&s.body, |b| b.id) {
             by_body[b].push(*s);
         }
     }
     by_body
+}
+
+/// How `body`'s predicted edges are matched: a provisional body's outline may lie up to
+/// its `outline_px` outside the object's, so its tolerance is widened by that.
+fn for_body(matching: &Matching, body: &SceneBody) -> Matching {
+    Matching {
+        tolerance_px: matching.tolerance_px + body.outline_px,
+        ..*matching
+    }
+}
+
+/// Marks in `explained` the image edges that the drawing `all` of `scene` accounts for:
+/// those along the predicted edges (each body's matched as [`for_body`] says), and every
+/// edge inside a provisional body's picture, whose inner edges the model does not know.
+fn explain_by_bodies(
+    scene: &Scene,
+    view: &View,
+    all: &[Segment],
+    matching: &Matching,
+    edges: &EdgeMap,
+    explained: &mut [bool],
+) {
+    let body_of = |id: BodyId| scene.bodies.binary_search_by_key(&id, |b| b.id).ok();
+    let (plain, widened): (Vec<Segment>, Vec<Segment>) = all
+        .iter()
+        .partition(|s| body_of(s.body).is_none_or(|b| scene.bodies[b].outline_px == 0.0));
+    matching.explain(edges, &edge_points(&plain, 1.0), explained);
+    for s in &widened {
+        if let Some(b) = body_of(s.body) {
+            let points = edge_points(std::slice::from_ref(s), 1.0);
+            for_body(matching, &scene.bodies[b]).explain(edges, &points, explained);
+        }
+    }
+    if scene.bodies.iter().any(|b| b.provisional) {
+        let frame = rasterize(scene, view);
+        for (bit, &face) in explained.iter_mut().zip(&frame.face) {
+            if face != NO_FACE && scene.bodies[scene.faces[face as usize].body as usize].provisional
+            {
+                *bit = true;
+            }
+        }
+        frame.recycle();
+    }
 }
 
 /// The logistic of `x`.
@@ -506,7 +558,9 @@ pub fn recognize(
     let mut reports = Vec::with_capacity(in_view.len());
     for &b in &in_view {
         let points = &points[b];
-        let edge_support = matching.support(edges, points).unwrap_or(0.0);
+        let edge_support = for_body(matching, &scene.bodies[b])
+            .support(edges, points)
+            .unwrap_or(0.0);
         let depth_agreement = counts.get(b).and_then(DepthCounts::agreement);
         let whole = areas[b].whole;
         reports.push(BodyReport {
@@ -548,7 +602,9 @@ pub fn recognize(
             let moved = scene.with_body_moved(b, &scene.body_points(b), &found.motion);
             let drawn = pieces_by_body(&moved, &hidden_lines(&moved, &view), eye, smooth_cos);
             let points = edge_points(&drawn[b], matching.spacing_px);
-            let edge_support = matching.support(edges, &points).unwrap_or(0.0);
+            let edge_support = for_body(matching, &scene.bodies[b])
+                .support(edges, &points)
+                .unwrap_or(0.0);
             let depth_agreement = match depth {
                 Some(d) => {
                     let f = rasterize(&moved, &view);
@@ -603,8 +659,7 @@ pub fn recognize(
     let (w, h) = (k.width as usize, k.height as usize);
     let mut explained = vec![false; w * h];
     let all = hidden_lines(&updated, &view);
-    let explaining = edge_points(&all, 1.0);
-    matching.explain(edges, &explaining, &mut explained);
+    explain_by_bodies(&updated, &view, &all, matching, edges, &mut explained);
 
     // 5. The unexplained regions.
     let regions = match depth {
