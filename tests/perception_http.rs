@@ -252,6 +252,19 @@ fn four_views_make_a_body_and_four_more_carve_it_keeping_what_the_crate_hides() 
     let views_seen: std::collections::BTreeSet<u64> =
         made_by.iter().filter_map(|m| m["view"].as_u64()).collect();
     assert!(views_seen.iter().any(|&v| v >= 4), "{views_seen:?}");
+
+    // A view that sees the cup nowhere near where the body is carves it away.
+    let corner: Vec<bool> = (0..480 * 640)
+        .map(|i| i % 640 < 40 && i / 640 < 40)
+        .collect();
+    let gone = s
+        .post(
+            "/v1/perception",
+            &json!({"views": [{"camera": "c4", "mask": mask_png(640, 480, &corner)}], "body": id}),
+        )
+        .ok();
+    assert_eq!(gone["removed"], json!([id]), "{gone}");
+    assert_eq!(s.get(&format!("/v1/bodies/{id}")).status, 404);
 }
 
 /// The loop closed: recognition on the pictures the masks came from reports the body

@@ -45,6 +45,10 @@ use super::holes;
 use super::mesh::{Maker, Mesh};
 use crate::model::camera::Camera;
 
+/// A face whose normal is this close to perpendicular to the line of sight (the cosine
+/// of their angle) is taken as seen edge-on.
+const EDGE_ON: f64 = 1e-9;
+
 /// Why one view could not carve a polyhedron by the image method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum Unsure {
@@ -177,10 +181,19 @@ pub fn carve(
         let middle = f.iter().map(|&v| mesh.positions[v as usize]).sum::<DVec3>() / f.len() as f64;
         let toward = normal.dot(centre - middle);
         let slant = toward / (normal.length() * (centre - middle).length());
-        // Turned toward the camera, a face runs clockwise in (u, v), where v points down.
-        if slant.abs() <= 1e-9 || slant.is_nan() || area2 == 0.0 || (toward > 0.0) != (area2 < 0.0)
-        {
+        if slant.is_nan() {
             return Err(Unsure::EdgeOn { face: fi as u32 });
+        }
+        // Turned toward the camera, a face runs clockwise in (u, v), where v points down.
+        // A face whose plane passes through the centre (a wall an earlier view from the
+        // same place made) is seen edge-on: no outline corner is inside it, and it keeps
+        // the part between the rays where its line in the image crosses the outline.
+        if slant.abs() <= EDGE_ON || area2 == 0.0 || (toward > 0.0) != (area2 < 0.0) {
+            faces.push(FaceView {
+                sense: 0,
+                corners: Vec::new(),
+            });
+            continue;
         }
         let (lo, hi) = ring
             .iter()
@@ -257,6 +270,42 @@ pub fn carve(
         }
         let mut outline_edges: Vec<u32> = along.keys().copied().collect();
         outline_edges.sort_unstable();
+        if fv.sense == 0 {
+            // Seen edge-on: along each ray where the face's line crosses the outline,
+            // the face's crossings pair up (in, out) by depth; each pair is an edge of
+            // the face's part inside the cone, and of that outline edge's wall.
+            let ends: Set<Key> = pieces.iter().map(|p| p.1).collect();
+            for g in outline_edges {
+                let mut xs = along.remove(&g).unwrap_or_default();
+                xs.sort_by(|&x, &y| {
+                    let d = |x: u32| (crossings[x as usize].at - centre).length();
+                    d(x).total_cmp(&d(y))
+                });
+                if !xs.len().is_multiple_of(2) {
+                    return Err(Unsure::Tangled);
+                }
+                for pair in xs.chunks(2) {
+                    let (a, b) = (Key::Cross(pair[0]), Key::Cross(pair[1]));
+                    let (a, b) = if ends.contains(&a) { (a, b) } else { (b, a) };
+                    pieces.push((a, b));
+                    walls[g as usize].push((b, a));
+                }
+            }
+            let normal = newell(mesh, f).normalize();
+            let e1 = normal.any_orthonormal_vector();
+            let e2 = normal.cross(e1);
+            let rings = holes::without_holes(link(&pieces)?, |k| {
+                let p = position(k, mesh, &crossings, &rays);
+                DVec2::new(p.dot(e1), p.dot(e2))
+            })
+            .ok_or(Unsure::Hole)?;
+            for ring in rings {
+                push_face(&mut out, &mut keys, &ring, mesh.makers[fi], |k| {
+                    position(k, mesh, &crossings, &rays)
+                });
+            }
+            continue;
+        }
         for g in outline_edges {
             let mut xs = along.remove(&g).unwrap_or_default();
             xs.sort_by(|&x, &y| {
@@ -393,7 +442,8 @@ struct RayHit {
 }
 
 struct FaceView {
-    /// +1 where the projected ring turns from +u toward +v, −1 the other way.
+    /// +1 where the projected ring turns from +u toward +v, −1 the other way, 0 for a
+    /// face seen edge-on.
     sense: i8,
     /// The outline corners inside the projection.
     corners: Vec<u32>,

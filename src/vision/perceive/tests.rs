@@ -9,11 +9,13 @@ use crate::model::camera::Intrinsics;
 use crate::model::check_solid;
 use crate::vision::image::Mask;
 
-/// A solid the test draws: a union of axis-aligned boxes, or a ball.
+/// A solid the test draws: a union of axis-aligned boxes, or a ball, or either turned
+/// about the origin.
 #[derive(Clone, Debug)]
 enum Solid {
     Boxes(Vec<(DVec3, DVec3)>),
     Ball(f64),
+    Turned(Box<Solid>, glam::DQuat),
 }
 
 impl Solid {
@@ -32,6 +34,7 @@ impl Solid {
                 let c = o.length_squared() - r * r;
                 b * b - c >= 0.0 && -b + (b * b - c).sqrt() > 0.0
             }
+            Solid::Turned(solid, q) => solid.hit(q.inverse() * o, q.inverse() * d),
         }
     }
 
@@ -42,6 +45,7 @@ impl Solid {
                 .map(|(lo, hi)| (*hi - *lo).element_product())
                 .sum(),
             Solid::Ball(r) => 4.0 / 3.0 * std::f64::consts::PI * r * r * r,
+            Solid::Turned(solid, _) => solid.volume(),
         }
     }
 
@@ -63,6 +67,7 @@ impl Solid {
                 })
                 .collect(),
             Solid::Ball(r) => fibonacci(200).into_iter().map(|d| d * (r - 1e-9)).collect(),
+            Solid::Turned(solid, q) => solid.samples().into_iter().map(|p| *q * p).collect(),
         }
     }
 }
@@ -277,4 +282,90 @@ fn a_ball_seen_by_more_cameras_has_less_to_spare() {
         assert!(excess > 0.0 && excess < last, "{n} views: excess {excess}");
         last = excess;
     }
+}
+
+#[test]
+fn random_boxes_and_l_prisms_give_valid_hulls_that_hold_them() {
+    let mut rng = crate::render::sample::SplitMix64::new(31);
+    for trial in 0..40 {
+        let size = DVec3::new(
+            rng.range(0.05, 0.2),
+            rng.range(0.05, 0.2),
+            rng.range(0.05, 0.2),
+        );
+        let (lo, hi) = (-size / 2.0, size / 2.0);
+        let solid = if trial % 2 == 0 {
+            Solid::Boxes(vec![(lo, hi)])
+        } else {
+            // An L: the box less one quarter of its extent in x and y.
+            let mid = DVec3::new(0.0, 0.0, hi.z);
+            Solid::Boxes(vec![
+                (lo, DVec3::new(hi.x, 0.0, hi.z)),
+                (DVec3::new(lo.x, 0.0, lo.z), mid),
+            ])
+        };
+        let axis = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        let turn = glam::DQuat::from_axis_angle(axis.normalize(), rng.range(0.0, 3.0));
+        let solid = Solid::Turned(Box::new(solid), turn);
+        let n = 2 + (rng.next_u64() % 7) as usize;
+        let cams = cameras(n, rng.range(0.5, 0.9), rng.range(400.0, 700.0));
+        let (pieces, _) = hull(&solid, &cams);
+        assert!(!pieces.is_empty(), "trial {trial}: nothing left");
+        assert_valid_and_holding(&pieces, &solid);
+    }
+}
+
+#[test]
+fn one_more_view_carves_a_hull_further() {
+    let solid = Solid::Turned(Box::new(a_box()), glam::DQuat::from_rotation_z(0.4));
+    let cams = cameras(6, 0.6, 500.0);
+    let all = sights(&solid, &cams);
+    let depths = Depths::default();
+    let mut tally = Tally::default();
+    let five = visual_hull(&all[..5], depths, &mut tally).expect("five views");
+    let six = carve_by(five.clone(), &all[5], depths, &mut tally).expect("one more");
+    let at_once = visual_hull(&all, depths, &mut tally).expect("six views");
+    let (v5, v6, v) = (
+        total_volume(&five),
+        total_volume(&six),
+        total_volume(&at_once),
+    );
+    assert!(v6 < v5, "{v6} < {v5}");
+    assert!(
+        (v6 - v).abs() <= 1e-9 * v,
+        "one more view {v6} against all at once {v}"
+    );
+    assert_valid_and_holding(&six, &solid);
+    assert_eq!(tally.boolean, 0, "{tally:?}");
+}
+
+#[test]
+fn a_camera_that_carved_before_carves_again_with_a_new_silhouette() {
+    let big = Solid::Ball(0.1);
+    let small = Solid::Ball(0.08);
+    let cams = cameras(6, 0.5, 500.0);
+    let depths = Depths::default();
+    let mut tally = Tally::default();
+    let first = visual_hull(&sights(&big, &cams), depths, &mut tally).expect("six views");
+    // Camera 0 again, now seeing only the smaller ball: its earlier walls are seen
+    // edge-on.
+    let again = Sight {
+        view: 6,
+        ..sights(&small, &cams[..1]).remove(0)
+    };
+    let carved = carve_by(first, &again, depths, &mut tally).expect("carved again");
+    assert_eq!(tally.boolean, 0, "{tally:?}");
+    assert_valid_and_holding(&carved, &small);
+    let mut mixed = sights(&big, &cams);
+    mixed[0] = sights(&small, &cams[..1]).remove(0);
+    let reference = visual_hull(&mixed, depths, &mut Tally::default()).expect("reference");
+    let (a, b) = (total_volume(&carved), total_volume(&reference));
+    assert!(
+        (a - b).abs() <= 1e-9 * b,
+        "carved again {a} against at once {b}"
+    );
 }
