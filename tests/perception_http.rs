@@ -222,6 +222,7 @@ fn four_views_make_a_body_and_four_more_carve_it_keeping_what_the_crate_hides() 
         .ok();
     assert_eq!(carved["carved"][0]["id"], id, "{carved}");
     assert_eq!(carved["carved"][0]["views"], 8);
+    assert_eq!(carved["carved"][0]["name"], "cup");
     assert!(carved["inserted"].as_array().expect("inserted").is_empty());
     let volume = carved["carved"][0]["volume"].as_f64().expect("a volume");
     let truth = CUP_SIZE.x * CUP_SIZE.y * CUP_SIZE.z;

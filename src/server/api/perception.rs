@@ -424,7 +424,8 @@ pub(super) async fn perception(State(state): State<AppState>, req: Request) -> A
     let Applied {
         revision, outcome, ..
     } = state.handle.apply_if(edit.clone(), expected).await?;
-    let answer = answer_of(&edit, &outcome, revision, &carved, started);
+    let carved_name = existing.and_then(|(b, _)| world.node(b).and_then(|n| n.name.clone()));
+    let answer = answer_of(&edit, &outcome, revision, &carved, carved_name, started);
     tracing::info!(
         inserted = answer.inserted.len(),
         carved = answer.carved.len(),
@@ -517,6 +518,7 @@ fn answer_of(
     outcome: &Outcome,
     revision: u64,
     carved: &Carved,
+    carved_name: Option<String>,
     started: Instant,
 ) -> PerceptionAnswer {
     let mut answer = PerceptionAnswer {
@@ -534,7 +536,10 @@ fn answer_of(
         for (piece, p) in pieces.iter().zip(placed) {
             let dto = BodyDto {
                 id: p.id,
-                name: piece.name.clone(),
+                name: piece
+                    .name
+                    .clone()
+                    .or_else(|| piece.body.is_some().then(|| carved_name.clone()).flatten()),
                 volume: p.volume,
                 faces: p.faces,
                 views: piece.views,
