@@ -392,6 +392,39 @@ fn varied_run() -> Run {
         "vertices": [[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]],
         "faces": [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]]}),
     )));
+    // Perception's geometry: a provisional tetrahedron, carved again, and refusals.
+    let wall =
+        |view: u32, edge: u32| json!({"kind": "wall", "view": view, "ring": 0, "edge": edge});
+    let tetra = |scale: f64| {
+        json!([
+            [scale, scale, scale + 8.0],
+            [scale, -scale, -scale + 8.0],
+            [-scale, scale, -scale + 8.0],
+            [-scale, -scale, scale + 8.0]
+        ])
+    };
+    let faces = json!([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]]);
+    let seen = run.ok(
+        json!({"edit": "perception", "pieces": [{"name": "seen", "views": 2,
+        "outline_px": 2.25, "positions": tetra(1.0), "faces": faces,
+        "makers": [wall(0, 1), wall(0, 2), wall(1, 0), {"kind": "near", "view": 1}]}]}),
+    );
+    let seen = seen.pieces.as_ref().expect("pieces")[0].id;
+    run.ok(
+        json!({"edit": "perception", "pieces": [{"body": seen, "views": 3,
+        "outline_px": 2.25, "positions": tetra(0.5), "faces": faces,
+        "makers": [wall(2, 1), wall(0, 2), wall(1, 0), wall(2, 3)]}]}),
+    );
+    run.refused(
+        json!({"edit": "perception", "pieces": [{"body": poly, "views": 1,
+        "positions": tetra(0.5), "faces": faces,
+        "makers": [wall(0, 0), wall(0, 1), wall(0, 2), wall(0, 3)]}]}),
+    );
+    run.refused(
+        json!({"edit": "perception", "pieces": [{"name": "open", "views": 1,
+        "positions": tetra(0.5), "faces": [[0, 1, 2], [0, 3, 1]],
+        "makers": [wall(0, 0), wall(0, 1)]}]}),
+    );
     let sem = run.ok(
         json!({"edit": "create_body", "shape": {"type": "seminal", "position": [0.0, 0.0, 5.0]}}),
     );

@@ -58,7 +58,11 @@ impl Maker {
 }
 
 /// The record of a provisional body: how many views carved it and what made each face.
+///
+/// Snapshots keep it in a flat form (see [`Flat`]): their encoding cannot read the
+/// tagged form [`Maker`] has in JSON.
 #[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(from = "Flat", into = "Flat")]
 pub struct Perceived {
     /// Views that carved the body, over every request (views are numbered from 0).
     pub views: u32,
@@ -77,5 +81,59 @@ impl Perceived {
             .binary_search_by_key(&face, |(s, _)| *s)
             .ok()
             .map(|i| self.makers[i].1)
+    }
+}
+
+/// [`Perceived`] as snapshots keep it: each maker as its kind's number (0 wall, 1 near,
+/// 2 far, 3 bound, 4 unrecorded) and its view, ring and edge (0 where it has none).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Flat {
+    views: u32,
+    outline_px: f64,
+    makers: Vec<(Serial, u8, u32, u32, u32)>,
+}
+
+impl From<Perceived> for Flat {
+    fn from(p: Perceived) -> Flat {
+        let makers = p
+            .makers
+            .into_iter()
+            .map(|(s, m)| match m {
+                Maker::Wall { view, ring, edge } => (s, 0, view, ring, edge),
+                Maker::Near { view } => (s, 1, view, 0, 0),
+                Maker::Far { view } => (s, 2, view, 0, 0),
+                Maker::Bound { view } => (s, 3, view, 0, 0),
+                Maker::Unrecorded => (s, 4, 0, 0, 0),
+            })
+            .collect();
+        Flat {
+            views: p.views,
+            outline_px: p.outline_px,
+            makers,
+        }
+    }
+}
+
+impl From<Flat> for Perceived {
+    fn from(f: Flat) -> Perceived {
+        let makers = f
+            .makers
+            .into_iter()
+            .map(|(s, kind, view, ring, edge)| {
+                let m = match kind {
+                    0 => Maker::Wall { view, ring, edge },
+                    1 => Maker::Near { view },
+                    2 => Maker::Far { view },
+                    3 => Maker::Bound { view },
+                    _ => Maker::Unrecorded,
+                };
+                (s, m)
+            })
+            .collect();
+        Perceived {
+            views: f.views,
+            outline_px: f.outline_px,
+            makers,
+        }
     }
 }
