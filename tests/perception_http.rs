@@ -106,23 +106,18 @@ fn revision(s: &TestServer) -> u64 {
         .expect("a revision")
 }
 
-/// The body's faces as polygons in world coordinates (its pose is the identity).
-fn polygons(s: &TestServer, id: u64) -> Vec<Vec<DVec3>> {
+/// The body's vertices (world coordinates: its pose is the identity) and faces.
+fn polygons(s: &TestServer, id: u64) -> (Vec<DVec3>, Vec<Vec<u32>>) {
     let t = s.get(&format!("/v1/bodies/{id}/topology")).ok();
-    let at: std::collections::HashMap<u64, DVec3> = t["vertices"]
-        .as_array()
-        .expect("vertices")
-        .iter()
-        .map(|v| {
-            let p = &v["position"];
-            let c = |k: usize| p[k].as_f64().expect("a coordinate");
-            (
-                v["id"].as_u64().expect("an id"),
-                DVec3::new(c(0), c(1), c(2)),
-            )
-        })
-        .collect();
-    t["faces"]
+    let mut index = std::collections::HashMap::new();
+    let mut positions = Vec::new();
+    for v in t["vertices"].as_array().expect("vertices") {
+        let p = &v["position"];
+        let c = |k: usize| p[k].as_f64().expect("a coordinate");
+        index.insert(v["id"].as_u64().expect("an id"), positions.len() as u32);
+        positions.push(DVec3::new(c(0), c(1), c(2)));
+    }
+    let faces = t["faces"]
         .as_array()
         .expect("faces")
         .iter()
@@ -131,26 +126,16 @@ fn polygons(s: &TestServer, id: u64) -> Vec<Vec<DVec3>> {
                 .as_array()
                 .expect("a ring")
                 .iter()
-                .map(|v| at[&v.as_u64().expect("an id")])
+                .map(|v| index[&v.as_u64().expect("an id")])
                 .collect()
         })
-        .collect()
+        .collect();
+    (positions, faces)
 }
 
-/// The winding number of closed polygons about `x` (1 inside, 0 outside).
-fn winding(faces: &[Vec<DVec3>], x: DVec3) -> f64 {
-    let mut total = 0.0;
-    for f in faces {
-        let a = f[0] - x;
-        for k in 1..f.len() - 1 {
-            let (b, c) = (f[k] - x, f[k + 1] - x);
-            let (la, lb, lc) = (a.length(), b.length(), c.length());
-            let num = a.dot(b.cross(c));
-            let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
-            total += 2.0 * num.atan2(den);
-        }
-    }
-    total / (4.0 * std::f64::consts::PI)
+/// The winding number of the body about `x` (1 inside, 0 outside).
+fn winding((positions, faces): &(Vec<DVec3>, Vec<Vec<u32>>), x: DVec3) -> f64 {
+    winged::model::geometry::winding_number(positions, faces, x)
 }
 
 /// The cup's corners, pulled in by a micrometre.

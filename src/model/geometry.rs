@@ -78,6 +78,43 @@ pub fn point_in_polygon(p: DVec2, poly: &[DVec2]) -> bool {
     odd
 }
 
+/// Six times the signed volume that closed polygons bound (negative for inward ones), by
+/// the divergence theorem over a fan of each face. Faces are rings of indices into
+/// `positions`, counter-clockwise seen from outside for a positive volume.
+pub fn six_volume<F: AsRef<[u32]>>(positions: &[DVec3], faces: &[F]) -> f64 {
+    let mut v = 0.0;
+    for f in faces {
+        let f = f.as_ref();
+        let a = positions[f[0] as usize];
+        for k in 1..f.len() - 1 {
+            let (b, c) = (positions[f[k] as usize], positions[f[k + 1] as usize]);
+            v += a.dot(b.cross(c));
+        }
+    }
+    v
+}
+
+/// The winding number of closed polygons about point `x` (1 inside an outward surface,
+/// −1 inside an inward one, 0 outside), by summing the solid angles the faces subtend
+/// (Van Oosterom and Strackee's formula over a fan of each face, which gives the right
+/// signed sum for concave planar faces too). Precondition: `x` is not on the surface.
+pub fn winding_number<F: AsRef<[u32]>>(positions: &[DVec3], faces: &[F], x: DVec3) -> f64 {
+    let mut omega = 0.0;
+    for f in faces {
+        let f = f.as_ref();
+        let a = positions[f[0] as usize] - x;
+        for k in 1..f.len() - 1 {
+            let b = positions[f[k] as usize] - x;
+            let c = positions[f[k + 1] as usize] - x;
+            let (la, lb, lc) = (a.length(), b.length(), c.length());
+            let num = a.dot(b.cross(c));
+            let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+            omega += 2.0 * num.atan2(den);
+        }
+    }
+    omega / (4.0 * std::f64::consts::PI)
+}
+
 impl Body {
     /// Newell's area vector of face `f`: its direction is the outward normal and its
     /// length twice the face's area. Right for concave and slightly non-planar faces.

@@ -121,37 +121,14 @@ impl Shell {
     /// Six times the signed volume the shell bounds (negative for a cavity or for an
     /// everted shell).
     pub fn six_volume(&self) -> f64 {
-        let mut v = 0.0;
-        for f in &self.faces {
-            let a = self.positions[f[0] as usize];
-            for k in 1..f.len() - 1 {
-                let (b, c) = (
-                    self.positions[f[k] as usize],
-                    self.positions[f[k + 1] as usize],
-                );
-                v += a.dot(b.cross(c));
-            }
-        }
-        v
+        crate::model::geometry::six_volume(&self.positions, &self.faces)
     }
 
     /// The winding number of the shell about point `x` (1 inside an outward shell, −1
     /// inside an inward one, 0 outside), by summing the solid angles its faces subtend.
     /// A fan of each planar face gives the right signed sum even for concave faces.
     fn winding(&self, x: DVec3) -> f64 {
-        let mut omega = 0.0;
-        for f in &self.faces {
-            let a = self.positions[f[0] as usize] - x;
-            for k in 1..f.len() - 1 {
-                let b = self.positions[f[k] as usize] - x;
-                let c = self.positions[f[k + 1] as usize] - x;
-                let (la, lb, lc) = (a.length(), b.length(), c.length());
-                let num = a.dot(b.cross(c));
-                let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
-                omega += 2.0 * num.atan2(den);
-            }
-        }
-        omega / (4.0 * std::f64::consts::PI)
+        crate::model::geometry::winding_number(&self.positions, &self.faces, x)
     }
 }
 

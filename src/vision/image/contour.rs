@@ -518,8 +518,7 @@ fn outline(corners: &[[f64; 2]], reach: f64) -> Vec<[f64; 2]> {
 /// in raster order (least v, then least u). Every point of `ring` is within `tolerance` of the kept
 /// ring's edge that spans it.
 fn douglas_peucker(ring: &[[f64; 2]], tolerance: f64) -> Vec<[f64; 2]> {
-    let n = ring.len();
-    if n < 3 {
+    if ring.len() < 3 {
         return ring.to_vec();
     }
     let first = first_in_raster_order(ring);
@@ -534,32 +533,10 @@ fn douglas_peucker(ring: &[[f64; 2]], tolerance: f64) -> Vec<[f64; 2]> {
     if far == first {
         return vec![ring[first]];
     }
-    let mut keep = vec![false; n];
-    keep[first] = true;
-    keep[far] = true;
-    let mut chains = vec![(first, far), (far, first)];
-    while let Some((a, b)) = chains.pop() {
-        let mut split = None;
-        let mut worst = tolerance;
-        let mut i = (a + 1) % n;
-        while i != b {
-            let d = distance_to_segment(ring[i], ring[a], ring[b]);
-            if d > worst {
-                (split, worst) = (Some(i), d);
-            }
-            i = (i + 1) % n;
-        }
-        if let Some(m) = split {
-            keep[m] = true;
-            chains.push((a, m));
-            chains.push((m, b));
-        }
-    }
-    (0..n)
-        .map(|k| (first + k) % n)
-        .filter(|&i| keep[i])
-        .map(|i| ring[i])
-        .collect()
+    split_chains(ring, first, far, |a, b, i| {
+        let d = distance_to_segment(ring[i], ring[a], ring[b]);
+        (d > tolerance).then_some((false, d))
+    })
 }
 
 /// Douglas–Peucker on a closed ring that only moves outward: a chord replaces the points
@@ -573,28 +550,43 @@ fn outward_douglas_peucker(ring: &[[f64; 2]], tolerance: f64) -> Vec<[f64; 2]> {
     if n < 4 {
         return ring.to_vec();
     }
-    let first = first_in_raster_order(ring);
     // The first point in raster order is a corner of the region's hull, so a split
     // there and at the point halfway round loses nothing.
-    let half = (first + n / 2) % n;
+    let first = first_in_raster_order(ring);
+    split_chains(ring, first, (first + n / 2) % n, |a, b, i| {
+        let right = orient(ring[a], ring[b], ring[i]) < 0;
+        let d = distance_to_segment(ring[i], ring[a], ring[b]);
+        (right || d > tolerance).then_some((right, d))
+    })
+}
+
+/// The points of closed `ring` kept when the chains between `first` and `second` (both
+/// kept) are split again and again: a chain `a → b` is split at its point `i` of the
+/// greatest `badness(a, b, i)` (`None` where `i` may go), until no point of any chain
+/// must go. In ring order from `first`.
+fn split_chains(
+    ring: &[[f64; 2]],
+    first: usize,
+    second: usize,
+    badness: impl Fn(usize, usize, usize) -> Option<(bool, f64)>,
+) -> Vec<[f64; 2]> {
+    let n = ring.len();
     let mut keep = vec![false; n];
     keep[first] = true;
-    keep[half] = true;
-    let mut chains = vec![(first, half), (half, first)];
+    keep[second] = true;
+    let mut chains = vec![(first, second), (second, first)];
     while let Some((a, b)) = chains.pop() {
-        let mut split = None;
-        // Points on the right rank above every point on the left.
-        let mut worst = (false, tolerance);
+        let mut split: Option<(usize, (bool, f64))> = None;
         let mut i = (a + 1) % n;
         while i != b {
-            let right = orient(ring[a], ring[b], ring[i]) < 0;
-            let d = distance_to_segment(ring[i], ring[a], ring[b]);
-            if (right, d) > worst {
-                (split, worst) = (Some(i), (right, d));
+            if let Some(bad) = badness(a, b, i)
+                && split.is_none_or(|(_, worst)| bad > worst)
+            {
+                split = Some((i, bad));
             }
             i = (i + 1) % n;
         }
-        if let Some(m) = split {
+        if let Some((m, _)) = split {
             keep[m] = true;
             chains.push((a, m));
             chains.push((m, b));

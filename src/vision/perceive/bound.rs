@@ -18,7 +18,7 @@ use crate::model::boolean::Map;
 use glam::{DVec2, DVec3};
 use robust::{Coord, orient2d};
 
-use super::cone::at_depth;
+use super::cone::between;
 use super::mesh::{Maker, Mesh};
 use crate::model::camera::Camera;
 
@@ -51,33 +51,8 @@ pub fn frustum(
     }
     let wide_near = widen(&hull, WIDEN_NEAR_PX)?;
     let wide_far = widen(&hull, WIDEN_FAR_PX)?;
-    let n = hull.len() as u32;
-    let mut positions: Vec<DVec3> = wide_near
-        .iter()
-        .map(|&q| at_depth(camera, q, near))
-        .collect();
-    positions.extend(wide_far.iter().map(|&q| at_depth(camera, q, far)));
-    let mut faces: Vec<Vec<u32>> = (0..n)
-        .map(|k| {
-            let k1 = (k + 1) % n;
-            vec![k, n + k, n + k1, k1]
-        })
-        .collect();
-    faces.push((0..n).collect());
-    faces.push((n..2 * n).rev().collect());
-    let mut makers = vec![Maker::Bound { view }; n as usize];
-    makers.push(Maker::Near { view });
-    makers.push(Maker::Far { view });
-    let mut mesh = Mesh {
-        positions,
-        faces,
-        makers,
-    };
-    if mesh.volume() < 0.0 {
-        for f in &mut mesh.faces {
-            f.reverse();
-        }
-    }
+    let walls = vec![Maker::Bound { view }; hull.len()];
+    let mesh = between(camera, (&wide_near, near), (&wide_far, far), walls, view);
     let planes = mesh.faces.iter().map(|f| plane_of(&mesh, f)).collect();
     Some(Frustum { mesh, planes })
 }

@@ -27,9 +27,35 @@ pub fn cone(
     view: u32,
     ring_index: u32,
 ) -> Mesh {
-    let n = ring.len() as u32;
-    let mut positions: Vec<DVec3> = ring.iter().map(|&q| at_depth(camera, q, near)).collect();
-    positions.extend(ring.iter().map(|&q| at_depth(camera, q, far)));
+    let walls = (0..ring.len() as u32)
+        .map(|edge| Maker::Wall {
+            view,
+            ring: ring_index,
+            edge,
+        })
+        .collect();
+    between(camera, (ring, near), (ring, far), walls, view)
+}
+
+/// The solid between ring `near.0` at depth `near.1` and ring `far.0` (as many points,
+/// corresponding edges parallel) at depth `far.1`, seen by `camera`: a side face per
+/// edge (made by `walls[k]`), then the near end and the far end.
+///
+/// Postconditions: closed, manifold, outward oriented (positive volume).
+pub fn between(
+    camera: &Camera,
+    near: (&[DVec2], f64),
+    far: (&[DVec2], f64),
+    walls: Vec<Maker>,
+    view: u32,
+) -> Mesh {
+    let n = near.0.len() as u32;
+    let mut positions: Vec<DVec3> = near
+        .0
+        .iter()
+        .map(|&q| at_depth(camera, q, near.1))
+        .collect();
+    positions.extend(far.0.iter().map(|&q| at_depth(camera, q, far.1)));
     let mut faces: Vec<Vec<u32>> = (0..n)
         .map(|k| {
             let k1 = (k + 1) % n;
@@ -38,13 +64,7 @@ pub fn cone(
         .collect();
     faces.push((0..n).collect());
     faces.push((n..2 * n).rev().collect());
-    let mut makers: Vec<Maker> = (0..n)
-        .map(|edge| Maker::Wall {
-            view,
-            ring: ring_index,
-            edge,
-        })
-        .collect();
+    let mut makers = walls;
     makers.push(Maker::Near { view });
     makers.push(Maker::Far { view });
     let mut mesh = Mesh {

@@ -5,6 +5,7 @@ use glam::DVec3;
 
 use crate::model::body::Body;
 use crate::model::boolean::Map;
+use crate::model::geometry;
 use crate::model::ids::{Serial, Serials, VertexId};
 use crate::model::solids::BuildError;
 
@@ -26,18 +27,15 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// The volume enclosed, by the divergence theorem over a fan of each face.
+    /// The volume enclosed (see [`geometry::six_volume`]).
     pub fn volume(&self) -> f64 {
-        let mut six = 0.0;
-        for f in &self.faces {
-            let a = self.positions[f[0] as usize];
-            for k in 1..f.len() - 1 {
-                let b = self.positions[f[k] as usize];
-                let c = self.positions[f[k + 1] as usize];
-                six += a.dot(b.cross(c));
-            }
-        }
-        six / 6.0
+        geometry::six_volume(&self.positions, &self.faces) / 6.0
+    }
+
+    /// The winding number about `x`: 1 inside, 0 outside (see
+    /// [`geometry::winding_number`]).
+    pub fn winding(&self, x: DVec3) -> f64 {
+        geometry::winding_number(&self.positions, &self.faces, x)
     }
 
     /// The faces of `body` (one ring each, counter-clockwise seen from outside), in the

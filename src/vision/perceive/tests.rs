@@ -125,24 +125,6 @@ fn sights(solid: &Solid, cameras: &[Camera]) -> Vec<Sight> {
         .collect()
 }
 
-/// The winding number of a closed mesh about `x` (1 inside, 0 outside), from the solid
-/// angles of a fan of each face.
-fn winding(mesh: &Mesh, x: DVec3) -> f64 {
-    let mut total = 0.0;
-    for f in &mesh.faces {
-        let a = mesh.positions[f[0] as usize] - x;
-        for k in 1..f.len() - 1 {
-            let b = mesh.positions[f[k] as usize] - x;
-            let c = mesh.positions[f[k + 1] as usize] - x;
-            let (la, lb, lc) = (a.length(), b.length(), c.length());
-            let num = a.dot(b.cross(c));
-            let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
-            total += 2.0 * num.atan2(den);
-        }
-    }
-    total / (4.0 * std::f64::consts::PI)
-}
-
 /// Every piece is a valid closed body (the kernel's validator), and the pieces hold
 /// every sample point of the solid.
 fn assert_valid_and_holding(pieces: &[Mesh], solid: &Solid) {
@@ -155,7 +137,7 @@ fn assert_valid_and_holding(pieces: &[Mesh], solid: &Solid) {
         assert!(p.volume() > 0.0);
     }
     for x in solid.samples() {
-        let w: f64 = pieces.iter().map(|p| winding(p, x)).sum();
+        let w: f64 = pieces.iter().map(|p| p.winding(x)).sum();
         assert!(
             (w - 1.0).abs() < 1e-6,
             "{x} is not inside the hull (winding {w})"
@@ -248,7 +230,7 @@ fn an_l_prism_keeps_its_notch_where_a_view_sees_into_it() {
     assert_eq!(tally.boolean, 0, "{tally:?}");
     assert_valid_and_holding(&pieces, &solid);
     let notch = DVec3::new(0.07, 0.07, 0.0);
-    let w: f64 = pieces.iter().map(|p| winding(p, notch)).sum();
+    let w: f64 = pieces.iter().map(|p| p.winding(notch)).sum();
     assert!(w.abs() < 1e-6, "the notch is filled: winding {w}");
 }
 
@@ -267,7 +249,7 @@ fn a_frame_seen_through_its_hole_keeps_the_hole() {
     let (pieces, tally) = hull(&solid, &cameras(12, 0.7, 450.0));
     assert_eq!(tally.boolean, 0, "{tally:?}");
     assert_valid_and_holding(&pieces, &solid);
-    let w: f64 = pieces.iter().map(|p| winding(p, DVec3::ZERO)).sum();
+    let w: f64 = pieces.iter().map(|p| p.winding(DVec3::ZERO)).sum();
     assert!(w.abs() < 1e-6, "the hole is filled: winding {w}");
 }
 
