@@ -1509,22 +1509,26 @@ fn appearance(c: &Contract) {
     );
 }
 
-fn recognition(c: &Contract) {
+/// A grey PNG of `pixels` (row-major), in base64.
+fn grey_png(width: u32, height: u32, pixels: &[u8]) -> String {
     use base64::Engine as _;
+    let mut png = Vec::new();
+    let mut encoder = png::Encoder::new(&mut png, width, height);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder
+        .write_header()
+        .expect("a header")
+        .write_image_data(pixels)
+        .expect("pixels");
+    base64::engine::general_purpose::STANDARD.encode(png)
+}
+
+fn recognition(c: &Contract) {
     let path = "/v1/recognition";
     let eye = c.ok("GET", "/v1/cameras/{name}", "/v1/cameras/eye", None);
     let size = |k: &str| eye["intrinsics"][k].as_u64().expect("a size") as u32;
-    let grey = |width: u32, height: u32| {
-        let mut png = Vec::new();
-        let mut encoder = png::Encoder::new(&mut png, width, height);
-        encoder.set_color(png::ColorType::Grayscale);
-        encoder
-            .write_header()
-            .expect("a header")
-            .write_image_data(&vec![90u8; (width * height) as usize])
-            .expect("pixels");
-        base64::engine::general_purpose::STANDARD.encode(png)
-    };
+    let grey =
+        |width: u32, height: u32| grey_png(width, height, &vec![90u8; (width * height) as usize]);
     let before = c.revision();
     // A blank picture: whatever the model has in view is absent.
     let got = c.ok(
@@ -1583,7 +1587,6 @@ fn recognition(c: &Contract) {
 }
 
 fn perception(c: &Contract) {
-    use base64::Engine as _;
     let path = "/v1/perception";
     let eye = c.ok("GET", "/v1/cameras/{name}", "/v1/cameras/eye", None);
     let size = |k: &str| eye["intrinsics"][k].as_u64().expect("a size") as u32;
@@ -1601,15 +1604,7 @@ fn perception(c: &Contract) {
                 })
             })
             .collect();
-        let mut png = Vec::new();
-        let mut encoder = png::Encoder::new(&mut png, width, height);
-        encoder.set_color(png::ColorType::Grayscale);
-        encoder
-            .write_header()
-            .expect("a header")
-            .write_image_data(&pixels)
-            .expect("pixels");
-        base64::engine::general_purpose::STANDARD.encode(png)
+        grey_png(width, height, &pixels)
     };
     let view = json!({"camera": "eye", "mask": mask(w, h, true)});
     let made = c.ok(

@@ -345,15 +345,7 @@ impl Plan {
         let chi = faces.len() as i64 - (nh / 2) as i64 + nv as i64;
         let handles = ((2 - chi) / 2) as u32;
         // Orientation: the signed volume of the fans.
-        let mut six_vol = 0.0;
-        for f in faces {
-            let f = f.as_ref();
-            let a = positions[f[0] as usize];
-            for k in 1..f.len() - 1 {
-                let (b, c) = (positions[f[k] as usize], positions[f[k + 1] as usize]);
-                six_vol += a.dot(b.cross(c));
-            }
-        }
+        let six_vol = crate::model::geometry::six_volume(positions, faces);
         if six_vol < 0.0 {
             return Err(BuildError::Inward {
                 volume: six_vol / 6.0,

@@ -132,15 +132,7 @@ pub fn visual_hull(
     let Some(start) = bound::start(first, others) else {
         return Ok(Vec::new());
     };
-    let mut pieces = vec![start];
-    for s in sights {
-        pieces = carve_by(pieces, s, depths, tally)?;
-        if pieces.is_empty() {
-            break;
-        }
-    }
-    pieces.sort_by(|a, b| b.volume().total_cmp(&a.volume()));
-    Ok(pieces)
+    carve_body(start, sights, depths, tally)
 }
 
 /// `pieces` carved by one more sight: their intersection with its cone between
