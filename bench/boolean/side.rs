@@ -16,10 +16,13 @@
 mod off;
 #[path = "side/scenes.rs"]
 mod scenes;
+#[path = "../side_cli.rs"]
+mod side_cli;
 #[path = "side/tri.rs"]
 mod tri;
+#[path = "../triangles.rs"]
+mod triangles;
 
-use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -65,22 +68,12 @@ enum Command {
 
 fn main() -> ExitCode {
     // One line per panic (the kernel's panics are caught and reported per scene).
-    std::panic::set_hook(Box::new(|info| eprintln!("panic: {info}")));
-    tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
-        .with_writer(std::io::stderr)
-        .init();
+    side_cli::start();
     let result = match Args::parse().command {
         Command::Write { dir, sizes } => write(&dir, &sizes),
         Command::Run { dir, repeat, only } => run(&dir, repeat.max(1), only.as_deref()),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("{e}");
-            ExitCode::FAILURE
-        }
-    }
+    side_cli::exit(result)
 }
 
 fn write(dir: &Path, sizes: &[usize]) -> Result<(), String> {
@@ -178,8 +171,7 @@ fn run(dir: &Path, repeat: usize, only: Option<&str>) -> Result<(), String> {
         let mut outcome = Err("not run".to_string());
         for _ in 0..repeat {
             let t = Instant::now();
-            let result = catch_unwind(AssertUnwindSafe(|| fold(&bodies, scene.op)))
-                .unwrap_or_else(|p| Err(format!("panicked: {}", panic_text(&*p))));
+            let result = side_cli::caught(|| fold(&bodies, scene.op));
             runs.push(t.elapsed().as_secs_f64());
             let failed = result.is_err();
             outcome = result;
@@ -254,12 +246,4 @@ fn fold(bodies: &[Body], op: Op) -> Result<Solution, String> {
         };
     }
     Ok(solution)
-}
-
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "no message".into())
 }

@@ -357,3 +357,18 @@ impl DoubleDouble {
         self.hi + self.lo
     }
 }
+
+/// `n` unit vectors spread evenly over the sphere: the Fibonacci lattice, point `i` at
+/// height `z = 1 − (2i + 1)/n` and turned by the golden angle from the one before.
+/// Deterministic; empty for `n = 0`.
+pub fn fibonacci_sphere(n: usize) -> Vec<DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let a = golden * i as f64;
+            DVec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect()
+}

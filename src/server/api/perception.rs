@@ -129,7 +129,8 @@ struct PerceptionAnswer {
     carved: Vec<BodyDto>,
     removed: Vec<u64>,
     revision: u64,
-    /// Carvings made in the image, and by the general boolean where that was unsure.
+    /// Carvings made in the image, by the general boolean where that was unsure, and
+    /// pieces a view could not carve (kept whole).
     carvings: CarvingsDto,
     elapsed_ms: f64,
 }
@@ -138,6 +139,7 @@ struct PerceptionAnswer {
 struct CarvingsDto {
     image: usize,
     boolean: usize,
+    uncarved: usize,
 }
 
 fn unprocessable(kind: &'static str, title: &'static str, detail: impl Into<String>) -> Problem {
@@ -432,6 +434,7 @@ pub(super) async fn perception(State(state): State<AppState>, req: Request) -> A
         removed = answer.removed.len(),
         views = views_given,
         boolean = carved.tally.boolean,
+        uncarved = carved.tally.uncarved,
         elapsed_ms = answer.elapsed_ms,
         "perceived"
     );
@@ -529,6 +532,7 @@ fn answer_of(
         carvings: CarvingsDto {
             image: carved.tally.exact_image,
             boolean: carved.tally.boolean,
+            uncarved: carved.tally.uncarved,
         },
         elapsed_ms: 0.0,
     };

@@ -109,6 +109,10 @@ pub struct Tally {
     pub exact_image: usize,
     /// Pieces carved by the general boolean.
     pub boolean: usize,
+    /// Pieces that a view could not carve (the image method unsure, the general boolean
+    /// refusing them as operands), kept whole: still holding everything the silhouettes
+    /// allow, but not cut down by that view.
+    pub uncarved: usize,
 }
 
 /// The visual hull of `sights` between `depths`: its connected pieces, largest volume
@@ -138,7 +142,9 @@ pub fn visual_hull(
 /// `pieces` carved by one more sight: their intersection with its cone between
 /// `depths`. Pieces inside the depths and in front of the camera are carved in the
 /// image ([`carve::carve`]); others, and those the image method is unsure of, by the
-/// general boolean.
+/// general boolean. A piece the boolean refuses (a face of it that is not a simple
+/// polygon, or two that cross) is kept as it was and counted in `tally.uncarved`, so
+/// that the result still holds every body the silhouettes allow.
 pub fn carve_by(
     pieces: Vec<Mesh>,
     sight: &Sight,
@@ -159,8 +165,17 @@ pub fn carve_by(
                 }
             }
         }
-        tally.boolean += 1;
-        out.extend(carve_by_boolean(&piece, sight, depths)?);
+        match carve_by_boolean(&piece, sight, depths) {
+            Ok(made) => {
+                tally.boolean += 1;
+                out.extend(made);
+            }
+            Err(why) => {
+                tracing::warn!(view = sight.view, %why, "a piece left uncarved by this view");
+                tally.uncarved += 1;
+                out.push(piece);
+            }
+        }
     }
     Ok(out)
 }

@@ -7,6 +7,7 @@ use glam::{DVec2, DVec3};
 use super::*;
 use crate::model::camera::Intrinsics;
 use crate::model::check_solid;
+use crate::model::geometry::fibonacci_sphere as fibonacci;
 use crate::vision::image::Mask;
 
 /// A solid the test draws: a union of axis-aligned boxes, or a ball, or either turned
@@ -70,19 +71,6 @@ impl Solid {
             Solid::Turned(solid, q) => solid.samples().into_iter().map(|p| *q * p).collect(),
         }
     }
-}
-
-/// `n` unit vectors spread evenly over the sphere.
-fn fibonacci(n: usize) -> Vec<DVec3> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
-            let r = (1.0 - z * z).sqrt();
-            let a = golden * i as f64;
-            DVec3::new(r * a.cos(), r * a.sin(), z)
-        })
-        .collect()
 }
 
 /// `n` cameras at `distance` from the origin on a Fibonacci sphere, looking at it.
@@ -350,4 +338,63 @@ fn a_camera_that_carved_before_carves_again_with_a_new_silhouette() {
         (a - b).abs() <= 1e-9 * b,
         "carved again {a} against at once {b}"
     );
+}
+
+#[test]
+fn a_piece_the_boolean_refuses_is_kept_whole_and_counted() {
+    // Two boxes that pass through each other, as one closed mesh: its faces cross, so
+    // the general boolean refuses it as an operand.
+    let mut serials = Serials::new();
+    let cube = crate::model::solids::box_solid(&mut serials, DVec3::splat(0.1)).expect("box");
+    let first = Mesh::of_body(&cube, |p| p, |_| Maker::Unrecorded);
+    let second = Mesh::of_body(&cube, |p| p + DVec3::splat(0.03), |_| Maker::Unrecorded);
+    let base = first.positions.len() as u32;
+    let crossed = Mesh {
+        positions: [first.positions.clone(), second.positions.clone()].concat(),
+        faces: first
+            .faces
+            .iter()
+            .cloned()
+            .chain(
+                second
+                    .faces
+                    .iter()
+                    .map(|f| f.iter().map(|i| i + base).collect()),
+            )
+            .collect(),
+        makers: [first.makers.clone(), second.makers.clone()].concat(),
+    };
+    // A camera looking away from it: the piece is behind the camera, so only the
+    // boolean could carve it.
+    let intrinsics = Intrinsics::centered(640, 480, 500.0).expect("intrinsics");
+    let camera = Camera::look_at(
+        DVec3::new(0.0, -1.0, 0.0),
+        DVec3::new(0.0, -2.0, 0.0),
+        DVec3::Z,
+        intrinsics,
+    )
+    .expect("camera");
+    let square = |c: f64, r: f64| {
+        vec![
+            DVec2::new(c - r, 240.0 - r),
+            DVec2::new(c + r, 240.0 - r),
+            DVec2::new(c + r, 240.0 + r),
+            DVec2::new(c - r, 240.0 + r),
+        ]
+    };
+    let sight = Sight {
+        camera,
+        outline: Outline {
+            rings: vec![square(320.0, 50.0)],
+        },
+        view: 7,
+    };
+    let mut tally = Tally::default();
+    let out = carve_by(vec![crossed.clone()], &sight, Depths::default(), &mut tally)
+        .expect("carving goes on");
+    assert_eq!(tally.uncarved, 1, "{tally:?}");
+    assert_eq!(tally.boolean, 0, "{tally:?}");
+    assert_eq!(out.len(), 1);
+    assert_eq!(out[0].positions, crossed.positions);
+    assert_eq!(out[0].faces, crossed.faces);
 }
