@@ -15,7 +15,8 @@ examples=${1:-10}
 [[ $examples =~ ^[1-9][0-9]*$ ]] || { echo "usage: $0 [EXAMPLES]" >&2; exit 2; }
 
 version=4.32.5
-venv=target/schemathesis-venv
+target=${CARGO_TARGET_DIR:-target}
+venv=$target/schemathesis-venv
 st=$venv/bin/schemathesis
 if ! "$st" --version 2>/dev/null | grep -qF "$version"; then
     echo "schemathesis: installing $version into $venv"
@@ -26,7 +27,7 @@ fi
 # The debug binary `cargo test` builds already; this only builds it if it is missing
 # or stale.
 cargo build --locked --quiet --bin winged
-bin=target/debug/winged
+bin=$target/debug/winged
 
 work=$(mktemp -d)
 server=
