@@ -17,16 +17,15 @@
 //! | [`spatial`]: the index and its queries | model |
 //! | [`edit`]: the command language, in the journal's serde form; `plan` and `apply` | model |
 //! | [`store`]: journal and snapshots | model, edit |
-//! | `mesh`: file formats | model |
+//! | [`mesh`]: mesh files in and out | model |
 //! | [`camera`]: projection and clipping | model |
 //! | [`render`]: appearance | model, spatial, camera |
 //! | [`vision`]: image analysis and camera solution | model, spatial, camera, render |
 //! | [`server`]: the owner, HTTP, events, auth, metrics | everything below |
-//!
-//! `mesh` is to come.
 
 pub mod camera;
 pub mod edit;
+pub mod mesh;
 pub mod model;
 pub mod render;
 pub mod server;

@@ -239,6 +239,17 @@ fn the_contract_is_well_formed() {
                     &["text/event-stream"]
                 } else if at.contains("/image") || at.contains("/v1/appearance") {
                     &["application/json", "image/png", "image/svg+xml"]
+                } else if at.contains("/v1/world/mesh") {
+                    &["model/gltf-binary"]
+                } else if at.contains("/mesh") {
+                    &[
+                        "application/x-off",
+                        "application/x-ply",
+                        "model/3mf",
+                        "model/gltf-binary",
+                        "model/obj",
+                        "model/stl",
+                    ]
                 } else {
                     &["application/json"]
                 };
@@ -587,6 +598,7 @@ fn answers_match_the_contract() {
     lights(&c);
     deletes(&c);
     booleans(&c);
+    meshes(&c);
     following(&c, start);
     unknown_route(&c);
 
@@ -1510,6 +1522,93 @@ fn appearance(c: &Contract) {
 }
 
 /// A grey PNG of `pixels` (row-major), in base64.
+fn meshes(c: &Contract) {
+    use base64::Engine as _;
+    let off = "OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+    let made = c.ok(
+        "POST",
+        "/v1/bodies",
+        "/v1/bodies",
+        Some(
+            json!({"name": "wedge-mesh", "shape": {"type": "mesh", "format": "off",
+            "data": base64::engine::general_purpose::STANDARD.encode(off),
+            "merge_coplanar": true}}),
+        ),
+    );
+    assert_eq!(made["bodies"].as_array().map(Vec::len), Some(1), "{made}");
+    let id = made["id"].as_u64().expect("an id");
+    let (one, import) = ("/v1/bodies/{id}/mesh", "/v1/bodies/import");
+    for (format, media) in [
+        ("obj", "model/obj"),
+        ("stl", "model/stl"),
+        ("ply", "application/x-ply"),
+        ("off", "application/x-off"),
+        ("glb", "model/gltf-binary"),
+        ("3mf", "model/3mf"),
+    ] {
+        let path = format!("/v1/bodies/{id}/mesh?format={format}&frame=body");
+        let file = c.ok_drawing("GET", one, &path, None, media);
+        let before = c.revision();
+        let back = c.exchange(
+            "POST",
+            import,
+            &format!("/v1/bodies/import?format={format}&name=wedge-{format}"),
+            Send::Raw(Some("application/octet-stream"), &file.bytes),
+        );
+        assert_eq!(back.status, 201, "{format}: {}", back.text);
+        assert_eq!(back.json()["revision"].as_u64(), Some(before + 1));
+    }
+    c.ok_drawing(
+        "GET",
+        "/v1/world/mesh",
+        "/v1/world/mesh",
+        None,
+        "model/gltf-binary",
+    );
+    let open = b"OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n";
+    let p = c.refused(
+        "POST",
+        import,
+        "/v1/bodies/import?format=off",
+        Send::Raw(Some("application/octet-stream"), open),
+        422,
+        Spec::Either,
+    );
+    assert_eq!(p["type"], "urn:winged:problem:mesh-invalid");
+    c.refused(
+        "POST",
+        import,
+        "/v1/bodies/import?format=stl",
+        Send::Raw(Some("application/octet-stream"), b"solid x\nfacet"),
+        422,
+        Spec::Either,
+    );
+    c.refused(
+        "POST",
+        import,
+        "/v1/bodies/import?format=blend",
+        Send::Raw(Some("application/octet-stream"), b"BLENDER"),
+        400,
+        Spec::Either,
+    );
+    c.refused(
+        "GET",
+        one,
+        "/v1/bodies/999999/mesh",
+        Send::Nothing,
+        404,
+        Spec::Either,
+    );
+    c.refused(
+        "GET",
+        "/v1/world/mesh",
+        "/v1/world/mesh?format=obj",
+        Send::Nothing,
+        400,
+        Spec::Either,
+    );
+}
+
 fn grey_png(width: u32, height: u32, pixels: &[u8]) -> String {
     use base64::Engine as _;
     let mut png = Vec::new();

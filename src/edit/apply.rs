@@ -11,8 +11,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::command::{
-    BooleanPiece, CameraSpec, CameraSpecError, CreateBody, EulerOp, LightSpec, Motion, Move,
-    PatchBody, PerceivedPiece, Shape, Sweep, SweepKind,
+    BooleanPiece, CameraSpec, CameraSpecError, CreateBody, EulerOp, ImportedBody, LightSpec,
+    Motion, Move, PatchBody, PerceivedPiece, Shape, Sweep, SweepKind,
 };
 use super::plan::{Prepared, prepare};
 use crate::model::boolean::Op;
@@ -156,6 +156,13 @@ pub enum Edit {
         #[serde(default, skip_serializing_if = "Vec::is_empty")]
         removed: Vec<u64>,
     },
+    /// The bodies a mesh file made, all or none, each a part of the world, of a body
+    /// already there, or of an earlier body of the list. The file itself is not kept:
+    /// the polygons are, so a replay does not depend on the parsers.
+    ImportBodies {
+        /// The bodies, each supart before its parts.
+        bodies: Vec<ImportedBody>,
+    },
 }
 
 impl Edit {
@@ -178,6 +185,7 @@ impl Edit {
             Edit::DeleteLight { .. } => "delete_light",
             Edit::Boolean { .. } | Edit::BooleanResult { .. } => "boolean",
             Edit::Perception { .. } => "perception",
+            Edit::ImportBodies { .. } => "import_bodies",
         }
     }
 }
@@ -599,7 +607,80 @@ pub(super) fn apply_prepared(
             ..
         } => super::boolean::replay(world, *body, *with, *keep_with, pieces),
         Edit::Perception { pieces, removed } => perception(world, pieces, removed),
+        Edit::ImportBodies { bodies } => {
+            let built = match prepared {
+                Prepared::Bodies(built) => Some(built),
+                _ => None,
+            };
+            import_bodies(world, bodies, built)
+        }
     }
+}
+
+/// Builds each body of an import as [`Built`]s numbered for a world whose next serial is
+/// `next`, one after another as they will be inserted.
+pub(super) fn build_imported(
+    bodies: &[ImportedBody],
+    next: Serial,
+) -> Result<Vec<Built>, EditError> {
+    let mut out = Vec::with_capacity(bodies.len());
+    let mut next = next;
+    for b in bodies {
+        check_faces(b.faces.len())?;
+        let faces: Vec<&[u32]> = b.faces.iter().collect();
+        let built = Built::expecting(next, |s| {
+            Body::from_polygons(s, &b.vertices, &faces)
+                .map_err(|e| EditError::from(SolidError::from(e)))
+        })?;
+        next = built.next_serial();
+        out.push(built);
+    }
+    Ok(out)
+}
+
+/// Inserts an import's bodies on a copy of the world that replaces it only when every
+/// body went in: a refusal leaves the world as it was.
+fn import_bodies(
+    world: &mut World,
+    bodies: &[ImportedBody],
+    built: Option<Vec<Built>>,
+) -> Result<Outcome, EditError> {
+    let built = match built {
+        Some(b) if b.len() == bodies.len() => b,
+        _ => build_imported(bodies, world.next_serial())?,
+    };
+    let mut next = world.clone();
+    let mut ids: Vec<BodyId> = Vec::with_capacity(bodies.len());
+    let mut placed = Vec::with_capacity(bodies.len());
+    for (k, (b, built)) in bodies.iter().zip(built).enumerate() {
+        let parent = match (b.within, b.parent) {
+            (Some(i), _) => *ids.get(i).filter(|_| i < k).ok_or_else(|| {
+                EditError::BadNumber(format!(
+                    "body {k} of the import is to be a part of body {i}, which does not come before it"
+                ))
+            })?,
+            (None, Some(p)) => body_id(&next, p)?,
+            (None, None) => next.root(),
+        };
+        let pose = b.pose.unwrap_or(Pose::IDENTITY);
+        let id = next.insert_built(built, b.name.as_deref(), parent, pose, b.color)?;
+        ids.push(id);
+        let body = body_of(&next, id);
+        placed.push(PieceOutcome {
+            id: id.get(),
+            faces: body.face_count(),
+            edges: body.edge_count(),
+            vertices: body.vertex_count(),
+            volume: body.volume(),
+            sources: Vec::new(),
+        });
+    }
+    *world = next;
+    Ok(Outcome {
+        id: ids.first().map(|b| b.get()),
+        pieces: Some(placed),
+        ..Outcome::default()
+    })
 }
 
 /// Places perception's result on a copy of the world that replaces it only when every

@@ -189,6 +189,32 @@ pub struct PerceivedPiece {
     pub makers: Vec<Maker>,
 }
 
+/// One body of a mesh file's import: polygons and its place in the parts tree.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ImportedBody {
+    /// A unique name, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The supart's id, when it is a body already in the world (`None` and no `within`:
+    /// the world).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parent: Option<u64>,
+    /// The supart, when it is an earlier body of the same import (its index in the
+    /// list); wins over `parent`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub within: Option<usize>,
+    /// Pose relative to the supart (`None`: identity).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pose: Option<Pose>,
+    /// Material colour (`None`: one chosen from the body's id).
+    #[serde(default, with = "hex::maybe", skip_serializing_if = "Option::is_none")]
+    pub color: Option<Color>,
+    /// Vertex loci in the body's frame, meters.
+    pub vertices: Vec<DVec3>,
+    /// Faces as vertex indices, counter-clockwise seen from outside.
+    pub faces: FaceList,
+}
+
 /// Make a body.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct CreateBody {

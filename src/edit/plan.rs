@@ -8,7 +8,9 @@
 //! on the same world, ids included: a body is built with serials numbered from 1 and
 //! takes its place in the world's serials when inserted (see [`Built`]).
 
-use super::apply::{Edit, EditError, Outcome, apply_prepared, build_checked, shape_faces};
+use super::apply::{
+    Edit, EditError, Outcome, apply_prepared, build_checked, build_imported, shape_faces,
+};
 use super::boolean::Solved;
 use crate::model::{Built, Camera, Light, Serial, World};
 
@@ -29,6 +31,8 @@ pub(super) enum Prepared {
     Light(Light),
     /// A boolean solved on a snapshot (boxed: the other plans are small).
     Boolean(Box<Solved>),
+    /// The bodies of an import, built and checked, numbered one after another.
+    Bodies(Vec<Built>),
 }
 
 /// Does the world-free work of `edit`, numbering a new body for a world whose next
@@ -37,6 +41,7 @@ pub(super) enum Prepared {
 pub(super) fn prepare(edit: &Edit, next: Serial) -> Result<Prepared, EditError> {
     Ok(match edit {
         Edit::CreateBody(req) => Prepared::Body(Box::new(build_checked(req, next)?)),
+        Edit::ImportBodies { bodies } => Prepared::Bodies(build_imported(bodies, next)?),
         Edit::PutCamera { camera, .. } => Prepared::Camera(camera.to_camera()?),
         Edit::PutLight { light, .. } => Prepared::Light(light.to_light()?),
         _ => Prepared::Nothing,
@@ -122,6 +127,9 @@ impl Edit {
     pub fn is_heavy(&self) -> bool {
         match self {
             Edit::CreateBody(req) => shape_faces(&req.shape) >= HEAVY_FACES,
+            Edit::ImportBodies { bodies } => {
+                bodies.iter().map(|b| b.faces.len()).sum::<usize>() >= HEAVY_FACES
+            }
             Edit::Boolean { .. } => true,
             _ => false,
         }

@@ -24,6 +24,7 @@ pub mod range;
 pub mod solids;
 pub mod topology;
 pub mod transform;
+pub mod triangulate;
 pub mod world;
 
 pub use body::{Body, Edge, Face, Vertex};
@@ -32,7 +33,7 @@ pub use check::{Report, Violation, check_solid, check_topology};
 pub use euler::EulerError;
 pub use geometry::{Bounds, Plane};
 pub use ids::{EdgeId, FaceId, Serial, Serials, Side, VertexId};
-pub use parts::{BodyId, BodyNode, Color, Entity, PartsTree, Size};
+pub use parts::{BodyId, BodyNode, Color, Entity, PartsTree, Size, default_color};
 pub use perceived::{Maker, Perceived};
 pub use pose::{Pose, PoseError};
 pub use range::RangeError;

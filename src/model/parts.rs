@@ -95,6 +95,27 @@ pub struct BodyNode {
     pub perceived: Option<Arc<Perceived>>,
 }
 
+/// A pleasant, stable default colour for a body without one: a hue from the id, fixed
+/// saturation and lightness. The same id always gets the same colour.
+pub fn default_color(id: BodyId) -> Color {
+    // Golden-ratio hue steps spread consecutive ids around the colour wheel.
+    let h = (id.get() as f64 * 0.618_033_988_749_895).fract() * 6.0;
+    let (s, l) = (0.45, 0.62);
+    let c = (1.0 - (2.0 * l - 1.0f64).abs()) * s;
+    let x = c * (1.0 - (h % 2.0 - 1.0).abs());
+    let m = l - c / 2.0;
+    let (r, g, b) = match h as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let to8 = |v: f64| ((v + m) * 255.0).round().clamp(0.0, 255.0) as u8;
+    Color([to8(r), to8(g), to8(b)])
+}
+
 /// A material colour: 8-bit sRGB red, green and blue.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Serialize, Deserialize)]
 pub struct Color(pub [u8; 3]);

@@ -26,7 +26,7 @@ pub mod sample;
 pub mod scene;
 
 pub use image::{Gray16, RgbImage};
-pub use scene::{Scene, SceneBody, SceneEdge, SceneFace, default_color};
+pub use scene::{Scene, SceneBody, SceneEdge, SceneFace};
 
 use serde::{Deserialize, Serialize};
 

@@ -15,10 +15,11 @@
 
 use std::ops::Range;
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::model::{BodyId, Bounds, Color, FaceId, Light, Pose, World};
+use crate::model::triangulate::FaceTriangulator;
+use crate::model::{BodyId, Bounds, Color, FaceId, Light, Pose, World, default_color};
 
 use super::cache::ShadowCache;
 
@@ -106,27 +107,6 @@ pub struct Scene {
     pub shadows: ShadowCache,
 }
 
-/// A pleasant, stable default colour for a body without one: a hue from the id, fixed
-/// saturation and lightness. The same id always gets the same colour.
-pub fn default_color(id: BodyId) -> Color {
-    // Golden-ratio hue steps spread consecutive ids around the colour wheel.
-    let h = (id.get() as f64 * 0.618_033_988_749_895).fract() * 6.0;
-    let (s, l) = (0.45, 0.62);
-    let c = (1.0 - (2.0 * l - 1.0f64).abs()) * s;
-    let x = c * (1.0 - (h % 2.0 - 1.0).abs());
-    let m = l - c / 2.0;
-    let (r, g, b) = match h as u32 {
-        0 => (c, x, 0.0),
-        1 => (x, c, 0.0),
-        2 => (0.0, c, x),
-        3 => (0.0, x, c),
-        4 => (x, 0.0, c),
-        _ => (c, 0.0, x),
-    };
-    let to8 = |v: f64| ((v + m) * 255.0).round().clamp(0.0, 255.0) as u8;
-    Color([to8(r), to8(g), to8(b)])
-}
-
 /// One body's part of a scene, with indices local to it.
 #[derive(Default)]
 struct Piece {
@@ -152,7 +132,7 @@ impl Scene {
         let pieces: Vec<Piece> = ids
             .par_iter()
             .with_min_len(64)
-            .map_init(earcut::Earcut::new, |ear, &id| piece(world, id, ear))
+            .map_init(FaceTriangulator::new, |ear, &id| piece(world, id, ear))
             .collect();
         let mut scene = Scene {
             revision: world.revision(),
@@ -309,7 +289,7 @@ fn bounds_of(points: &[DVec3]) -> Option<Bounds> {
 }
 
 /// Body `id`'s faces, edges and vertices in world coordinates, indices local.
-fn piece(world: &World, id: BodyId, ear: &mut earcut::Earcut<f64>) -> Piece {
+fn piece(world: &World, id: BodyId, ear: &mut FaceTriangulator) -> Piece {
     let (Some(node), Some(pose)) = (world.node(id), world.world_pose(id)) else {
         return Piece::default();
     };
@@ -333,7 +313,6 @@ fn piece(world: &World, id: BodyId, ear: &mut earcut::Earcut<f64>) -> Piece {
     }
     let face_slots = body.faces().map(|f| f.index() + 1).max().unwrap_or(0);
     let mut face_local = vec![u32::MAX; face_slots];
-    let mut flat = Vec::new();
     let mut tris = Vec::new();
     for f in body.faces() {
         let fi = piece.faces.len() as u32;
@@ -352,7 +331,7 @@ fn piece(world: &World, id: BodyId, ear: &mut earcut::Earcut<f64>) -> Piece {
             normal.dot(sum / corners.len() as f64)
         };
         if normal != DVec3::ZERO && corners.len() >= 3 {
-            triangulate(&piece.points, corners, normal, ear, &mut flat, &mut tris);
+            ear.triangulate(&piece.points, corners, normal, &mut tris);
             for t in &tris {
                 piece.triangles.push(*t);
                 piece.triangle_faces.push(fi);
@@ -377,61 +356,6 @@ fn piece(world: &World, id: BodyId, ear: &mut earcut::Earcut<f64>) -> Piece {
         });
     }
     piece
-}
-
-/// Triangulates one planar face, `corners` counter-clockwise about `normal`, into `out`
-/// (indices into `points`), each triangle wound like the face.
-fn triangulate(
-    points: &[DVec3],
-    corners: &[u32],
-    normal: DVec3,
-    ear: &mut earcut::Earcut<f64>,
-    flat: &mut Vec<[f64; 2]>,
-    out: &mut Vec<[u32; 3]>,
-) {
-    out.clear();
-    // Coordinates in the face's plane, right-handed about the normal.
-    let (u, v) = normal.any_orthonormal_pair();
-    flat.clear();
-    flat.extend(corners.iter().map(|&c| {
-        let p = points[c as usize];
-        [p.dot(u), p.dot(v)]
-    }));
-    if is_convex(flat) {
-        out.extend((1..corners.len() - 1).map(|i| [corners[0], corners[i], corners[i + 1]]));
-        return;
-    }
-    let mut idx: Vec<u32> = Vec::new();
-    ear.earcut(flat.iter().copied(), &[] as &[u32], &mut idx);
-    for t in idx.chunks_exact(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
-        let (pa, pb, pc) = (
-            DVec2::from(flat[a]),
-            DVec2::from(flat[b]),
-            DVec2::from(flat[c]),
-        );
-        let ccw = (pb - pa).perp_dot(pc - pa) > 0.0;
-        let tri = if ccw { [a, b, c] } else { [a, c, b] };
-        out.push(tri.map(|i| corners[i]));
-    }
-}
-
-/// Whether a polygon (in the plane, counter-clockwise) is strictly convex: every turn is
-/// to the left and it winds once. Repeated corners (bridge edges) make it not convex.
-fn is_convex(poly: &[[f64; 2]]) -> bool {
-    let n = poly.len();
-    let mut turning = 0.0;
-    for i in 0..n {
-        let a = DVec2::from(poly[i]);
-        let b = DVec2::from(poly[(i + 1) % n]);
-        let c = DVec2::from(poly[(i + 2) % n]);
-        let (d1, d2) = (b - a, c - b);
-        if d1.perp_dot(d2) <= 0.0 {
-            return false;
-        }
-        turning += d1.perp_dot(d2).atan2(d1.dot(d2));
-    }
-    (turning - std::f64::consts::TAU).abs() < 1e-6
 }
 
 #[cfg(test)]

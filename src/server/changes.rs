@@ -318,6 +318,26 @@ pub fn describe(
                 parts_of(&mut changes, Some(s));
             }
         }
+        Edit::ImportBodies { .. } => {
+            // Every body is new; a supart outside the import gains parts.
+            let placed = outcome.pieces.as_deref().unwrap_or_default();
+            let new: Vec<u64> = placed.iter().map(|p| p.id).collect();
+            let mut suparts = Vec::new();
+            for &id in &new {
+                changes.push(EntityChange::body(Added, id, &[]));
+                suparts.extend(
+                    after
+                        .supart(BodyId(Serial(id)))
+                        .map(|s| s.get())
+                        .filter(|s| !new.contains(s)),
+                );
+            }
+            suparts.sort_unstable();
+            suparts.dedup();
+            for s in suparts {
+                parts_of(&mut changes, Some(s));
+            }
+        }
     }
     Change {
         revision,

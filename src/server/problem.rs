@@ -28,6 +28,9 @@ pub struct Problem {
     /// Whether the answer comes before the request's body was read: then it is sent with
     /// `Connection: close` (see [`refused_unread`]).
     pub unread: bool,
+    /// Extension members (RFC 9457 §3.2) beside the standard ones: where in an uploaded
+    /// file a defect is, say.
+    pub extra: Option<Box<serde_json::Map<String, serde_json::Value>>>,
 }
 
 #[derive(Serialize)]
@@ -39,6 +42,8 @@ struct Body<'a> {
     detail: &'a str,
     #[serde(skip_serializing_if = "Option::is_none")]
     revision: Option<u64>,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    extra: Option<&'a serde_json::Map<String, serde_json::Value>>,
 }
 
 impl Problem {
@@ -57,7 +62,17 @@ impl Problem {
             retry_after: None,
             revision: None,
             unread: false,
+            extra: None,
         }
+    }
+
+    /// The same problem with the extension member `name` set to `value` (the standard
+    /// members `type`, `title`, `status`, `detail` and `revision` are not to be named).
+    pub fn with_member(mut self, name: &str, value: serde_json::Value) -> Self {
+        self.extra
+            .get_or_insert_with(Default::default)
+            .insert(name.to_owned(), value);
+        self
     }
 
     /// The same problem, telling the client to retry after `seconds`.
@@ -136,6 +151,7 @@ impl Problem {
             status: self.status.as_u16(),
             detail: &self.detail,
             revision: self.revision,
+            extra: self.extra.as_deref(),
         }
     }
 

@@ -14,6 +14,8 @@
 mod into_command;
 mod shape_json;
 
+pub use into_command::{MeshCreate, NewBody};
+
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
@@ -152,6 +154,77 @@ pub enum Shape {
         /// The vertex locus (default the origin).
         position: [f64; 3],
     },
+    /// A mesh file (base64 in `data`), one body per object of the file.
+    Mesh(Box<MeshShape>),
+}
+
+/// A mesh file inside a JSON request, and how to read it.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct MeshShape {
+    /// The file's format.
+    pub format: crate::mesh::Format,
+    /// The file, base64 (standard alphabet, padding optional).
+    pub data: String,
+    /// How to read it.
+    #[serde(flatten)]
+    pub options: MeshOptions,
+}
+
+/// How a mesh file is read: the `mesh` shape's fields, or `POST /v1/bodies/import`'s
+/// query parameters. Unset, each takes the default of [`crate::mesh::ImportOptions`].
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct MeshOptions {
+    /// The file's length unit (`m`, `mm`, `cm`, `in`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit: Option<crate::mesh::Unit>,
+    /// Whether adjacent coplanar faces become one polygon (default true).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merge_coplanar: Option<bool>,
+    /// Vertices closer than this many meters are one (default 0: equal coordinates).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weld: Option<f64>,
+    /// How far from a merged face's plane its vertices may lie, as a fraction of the
+    /// piece's size (default 1e-6).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coplanar_tolerance: Option<f64>,
+    /// Whether faces are tested for crossing each other (default true).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub check_intersections: Option<bool>,
+}
+
+impl MeshOptions {
+    /// The import options these ask for.
+    ///
+    /// # Errors
+    /// A `weld` that is negative, not finite or above 1 m; a `coplanar_tolerance`
+    /// outside `[0, 0.01]`.
+    pub fn to_import(self) -> Result<crate::mesh::ImportOptions, String> {
+        let mut o = crate::mesh::ImportOptions {
+            unit: self.unit,
+            ..crate::mesh::ImportOptions::default()
+        };
+        if let Some(m) = self.merge_coplanar {
+            o.merge_coplanar = m;
+        }
+        if let Some(w) = self.weld {
+            if !(w.is_finite() && (0.0..=1.0).contains(&w)) {
+                return Err(format!("weld must be between 0 and 1 (meters), not {w}"));
+            }
+            o.weld = w;
+        }
+        if let Some(t) = self.coplanar_tolerance {
+            if !(t.is_finite() && (0.0..=0.01).contains(&t)) {
+                return Err(format!(
+                    "coplanar_tolerance must be between 0 and 0.01, not {t}"
+                ));
+            }
+            o.coplanar_tolerance = t;
+        }
+        if let Some(c) = self.check_intersections {
+            o.check_crossings = c;
+        }
+        Ok(o)
+    }
 }
 
 /// A material colour in JSON: the string `"#rrggbb"`.

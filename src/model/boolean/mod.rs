@@ -535,6 +535,7 @@ fn distinct(pts: &Points, p: Pid, q: Pid) -> bool {
 mod assemble;
 mod broad;
 mod classify;
+pub mod crossing;
 mod double;
 pub(crate) mod exact;
 mod holes;

@@ -268,6 +268,12 @@ impl Built {
     pub fn body(&self) -> &Body {
         &self.body
     }
+
+    /// The serial a world that took this body as built would take next: the one to
+    /// build the next body of a batch for.
+    pub fn next_serial(&self) -> Serial {
+        Serial(self.end)
+    }
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@ pub mod body;
 pub mod camera_solution;
 pub mod extract;
 mod feed;
+mod mesh;
 mod model;
 mod named;
 mod ops;
@@ -100,6 +101,7 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         .route("/v1/world", reads(get(world)))
         .route("/v1/world/changes", reads(get(feed::changes)))
         .route("/v1/world/events", reads(get(feed::events)))
+        .route("/v1/world/mesh", reads(get(mesh::export_world)))
         .route(
             "/v1/bodies",
             reads(get(list_bodies)).merge(writes(post(create_body))),
@@ -109,7 +111,9 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
             reads(get(get_body))
                 .merge(writes(axum::routing::patch(patch_body).delete(delete_body))),
         )
+        .route("/v1/bodies/import", writes(post(mesh::import)))
         .route("/v1/bodies/{id}/topology", reads(get(topology)))
+        .route("/v1/bodies/{id}/mesh", reads(get(mesh::export_body)))
         .route("/v1/bodies/{id}/euler", writes(post(euler)))
         .route("/v1/bodies/{id}/transform", writes(post(transform)))
         .route("/v1/bodies/{id}/sweep", writes(post(sweep)))

@@ -20,7 +20,8 @@ use crate::server::dto::{
 };
 use crate::server::problem::Problem;
 use crate::server::request::{
-    BooleanReq, CopyReq, CreateBody, EulerOp, HexColor, PatchBody, SweepReq, TransformReq,
+    BooleanReq, CopyReq, CreateBody, EulerOp, HexColor, NewBody, PatchBody, SweepReq,
+    TransformReq,
 };
 
 pub(super) async fn world(State(h): State<Handle>) -> Answer {
@@ -52,7 +53,7 @@ fn body_dto(w: &World, b: BodyId) -> Option<BodyDto> {
         world_pose: w.world_pose(b)?.into(),
         color: HexColor(
             node.color
-                .unwrap_or_else(|| crate::render::default_color(b)),
+                .unwrap_or_else(|| crate::model::default_color(b)),
         ),
         euler: euler_of(body),
         volume: body.volume(),
@@ -198,8 +199,12 @@ fn topology_dto(w: &World, b: BodyId) -> TopologyDto {
 }
 
 pub(super) async fn create_body(State(h): State<Handle>, req: WriteJson<CreateBody>) -> Answer {
-    let edit = Edit::CreateBody(req.value.into());
-    write(&h, edit, req.expected, StatusCode::CREATED).await
+    match NewBody::from(req.value) {
+        NewBody::Solid(create) => {
+            write(&h, Edit::CreateBody(create), req.expected, StatusCode::CREATED).await
+        }
+        NewBody::Mesh(mesh) => super::mesh::create(&h, mesh, req.expected).await,
+    }
 }
 
 pub(super) async fn patch_body(

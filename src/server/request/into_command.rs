@@ -5,8 +5,8 @@
 use glam::{DVec2, DVec3};
 
 use super::{
-    BooleanOp, BooleanReq, CameraReq, CreateBody, EulerOp, FrameDto, LightDto, PatchBody, PoseDto,
-    Shape, SweepKind, SweepReq, TransformOp, TransformReq,
+    BooleanOp, BooleanReq, CameraReq, CreateBody, EulerOp, FrameDto, LightDto, MeshShape,
+    PatchBody, PoseDto, Shape, SweepKind, SweepReq, TransformOp, TransformReq,
 };
 use crate::edit::Edit;
 use crate::edit::command::{self, CameraSpec, LightSpec, LookAt, Motion, Move, Raster, Sweep};
@@ -23,79 +23,113 @@ impl From<PoseDto> for Pose {
     }
 }
 
-impl From<Shape> for command::Shape {
-    fn from(shape: Shape) -> Self {
-        let points = |p: Vec<[f64; 2]>| p.into_iter().map(DVec2::from_array).collect();
-        match shape {
-            Shape::Box { size } => command::Shape::Box { size: v3(size) },
-            Shape::Tetrahedron { radius } => command::Shape::Tetrahedron { radius },
-            Shape::Prism { polygon, height } => command::Shape::Prism {
-                polygon: points(polygon),
-                height,
-            },
-            Shape::Pyramid { polygon, height } => command::Shape::Pyramid {
-                polygon: points(polygon),
-                height,
-            },
-            Shape::Cylinder {
-                radius,
-                height,
-                segments,
-            } => command::Shape::Cylinder {
-                radius,
-                height,
-                segments,
-            },
-            Shape::Cone {
-                radius,
-                height,
-                segments,
-            } => command::Shape::Cone {
-                radius,
-                height,
-                segments,
-            },
-            Shape::Sphere {
-                radius,
-                segments,
-                rings,
-            } => command::Shape::Sphere {
-                radius,
-                segments,
-                rings,
-            },
-            Shape::Torus {
-                major_radius,
-                minor_radius,
-                segments,
-                rings,
-            } => command::Shape::Torus {
-                major_radius,
-                minor_radius,
-                segments,
-                rings,
-            },
-            Shape::Polyhedron { vertices, faces } => command::Shape::Polyhedron {
-                vertices: vertices.into_iter().map(v3).collect(),
-                faces,
-            },
-            Shape::Seminal { position } => command::Shape::Seminal {
-                position: v3(position),
-            },
+/// What `POST /v1/bodies` asks for: a solid (one edit as it is), or a mesh file to read
+/// first.
+pub enum NewBody {
+    /// A solid of the edit language.
+    Solid(command::CreateBody),
+    /// A mesh file, and where its bodies go.
+    Mesh(MeshCreate),
+}
+
+/// A mesh file to read and where its bodies go.
+pub struct MeshCreate {
+    /// The file and how to read it.
+    pub shape: MeshShape,
+    /// The name of the file's first body.
+    pub name: Option<String>,
+    /// The supart of the file's top-level bodies.
+    pub parent: Option<u64>,
+    /// Composed before each top-level body's pose from the file.
+    pub pose: Option<Pose>,
+    /// The colour of every body, over the file's.
+    pub color: Option<crate::model::Color>,
+}
+
+impl From<CreateBody> for NewBody {
+    fn from(req: CreateBody) -> Self {
+        let pose = req.pose.map(Pose::from);
+        let color = req.color.map(|c| c.0);
+        match command_shape(req.shape) {
+            Ok(shape) => NewBody::Solid(command::CreateBody {
+                name: req.name,
+                parent: req.parent,
+                pose,
+                color,
+                shape,
+            }),
+            Err(mesh) => NewBody::Mesh(MeshCreate {
+                shape: *mesh,
+                name: req.name,
+                parent: req.parent,
+                pose,
+                color,
+            }),
         }
     }
 }
 
-impl From<CreateBody> for command::CreateBody {
-    fn from(req: CreateBody) -> Self {
-        command::CreateBody {
-            name: req.name,
-            parent: req.parent,
-            pose: req.pose.map(Pose::from),
-            color: req.color.map(|c| c.0),
-            shape: req.shape.into(),
-        }
-    }
+/// The edit language's shape for a solid, or the mesh shape, which has none.
+fn command_shape(shape: Shape) -> Result<command::Shape, Box<MeshShape>> {
+    let points = |p: Vec<[f64; 2]>| p.into_iter().map(DVec2::from_array).collect();
+    Ok(match shape {
+        Shape::Box { size } => command::Shape::Box { size: v3(size) },
+        Shape::Tetrahedron { radius } => command::Shape::Tetrahedron { radius },
+        Shape::Prism { polygon, height } => command::Shape::Prism {
+            polygon: points(polygon),
+            height,
+        },
+        Shape::Pyramid { polygon, height } => command::Shape::Pyramid {
+            polygon: points(polygon),
+            height,
+        },
+        Shape::Cylinder {
+            radius,
+            height,
+            segments,
+        } => command::Shape::Cylinder {
+            radius,
+            height,
+            segments,
+        },
+        Shape::Cone {
+            radius,
+            height,
+            segments,
+        } => command::Shape::Cone {
+            radius,
+            height,
+            segments,
+        },
+        Shape::Sphere {
+            radius,
+            segments,
+            rings,
+        } => command::Shape::Sphere {
+            radius,
+            segments,
+            rings,
+        },
+        Shape::Torus {
+            major_radius,
+            minor_radius,
+            segments,
+            rings,
+        } => command::Shape::Torus {
+            major_radius,
+            minor_radius,
+            segments,
+            rings,
+        },
+        Shape::Polyhedron { vertices, faces } => command::Shape::Polyhedron {
+            vertices: vertices.into_iter().map(v3).collect(),
+            faces,
+        },
+        Shape::Seminal { position } => command::Shape::Seminal {
+            position: v3(position),
+        },
+        Shape::Mesh(mesh) => return Err(mesh),
+    })
 }
 
 impl From<PatchBody> for command::PatchBody {

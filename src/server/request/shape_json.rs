@@ -30,6 +30,7 @@ enum ShapeType {
     Torus,
     Polyhedron,
     Seminal,
+    Mesh,
 }
 
 impl ShapeType {
@@ -44,6 +45,15 @@ impl ShapeType {
             ShapeType::Torus => &["major_radius", "minor_radius", "segments", "rings"],
             ShapeType::Polyhedron => &["vertices", "faces"],
             ShapeType::Seminal => &["position"],
+            ShapeType::Mesh => &[
+                "format",
+                "data",
+                "unit",
+                "merge_coplanar",
+                "weld",
+                "coplanar_tolerance",
+                "check_intersections",
+            ],
         }
     }
 }
@@ -76,6 +86,20 @@ struct Fields {
     faces: Option<FaceList>,
     #[serde(default, deserialize_with = "given")]
     position: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "given")]
+    format: Option<crate::mesh::Format>,
+    #[serde(default, deserialize_with = "given")]
+    data: Option<String>,
+    #[serde(default, deserialize_with = "given")]
+    unit: Option<crate::mesh::Unit>,
+    #[serde(default, deserialize_with = "given")]
+    merge_coplanar: Option<bool>,
+    #[serde(default, deserialize_with = "given")]
+    weld: Option<f64>,
+    #[serde(default, deserialize_with = "given")]
+    coplanar_tolerance: Option<f64>,
+    #[serde(default, deserialize_with = "given")]
+    check_intersections: Option<bool>,
 }
 
 /// A field that is present: `null` is refused as `T` refuses it.
@@ -101,7 +125,7 @@ fn need<T, E: de::Error>(v: Option<T>, name: &'static str) -> Result<T, E> {
 
 impl Fields {
     /// The name of each field besides `type`, and whether it was given.
-    fn given(&self) -> [(&'static str, bool); 11] {
+    fn given(&self) -> [(&'static str, bool); 18] {
         [
             ("size", self.size.is_some()),
             ("radius", self.radius.is_some()),
@@ -114,6 +138,13 @@ impl Fields {
             ("vertices", self.vertices.is_some()),
             ("faces", self.faces.is_some()),
             ("position", self.position.is_some()),
+            ("format", self.format.is_some()),
+            ("data", self.data.is_some()),
+            ("unit", self.unit.is_some()),
+            ("merge_coplanar", self.merge_coplanar.is_some()),
+            ("weld", self.weld.is_some()),
+            ("coplanar_tolerance", self.coplanar_tolerance.is_some()),
+            ("check_intersections", self.check_intersections.is_some()),
         ]
     }
 
@@ -175,6 +206,17 @@ impl Fields {
             ShapeType::Seminal => Shape::Seminal {
                 position: self.position.unwrap_or_default(),
             },
+            ShapeType::Mesh => Shape::Mesh(Box::new(super::MeshShape {
+                format: need(self.format, "format")?,
+                data: need(self.data, "data")?,
+                options: super::MeshOptions {
+                    unit: self.unit,
+                    merge_coplanar: self.merge_coplanar,
+                    weld: self.weld,
+                    coplanar_tolerance: self.coplanar_tolerance,
+                    check_intersections: self.check_intersections,
+                },
+            })),
         })
     }
 }

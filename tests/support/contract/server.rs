@@ -65,6 +65,8 @@ pub struct Reply {
     pub media_type: String,
     /// The body as text.
     pub text: String,
+    /// The body as bytes (for files and images).
+    pub bytes: Vec<u8>,
 }
 
 impl Reply {
@@ -141,6 +143,7 @@ impl Http {
             status: res.status().as_u16(),
             media_type,
             text,
+            bytes,
         }
     }
 }
