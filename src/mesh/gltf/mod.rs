@@ -2,17 +2,18 @@
 //!
 //! **Reading** ([`read`]): the document is parsed (JSON or GLB, told apart by the `glTF`
 //! magic) and validated by the `gltf` crate; buffers come from the GLB's BIN chunk or
-//! base64 `data:` URIs only (module `source`). The default scene's node hierarchy is walked
-//! and every node whose mesh has triangles becomes one object (module `scene`): its
-//! primitives' triangles concatenated, its pose the rigid part of its world matrix, any
-//! scale, shear or mirror applied to its positions.
+//! base64 `data:` URIs only (module `source`). The default scene's node hierarchy is
+//! walked and every node whose mesh has triangles becomes one object (module `scene`):
+//! its primitives' triangles concatenated, its pose the rigid part of its world matrix,
+//! any scale, shear or mirror applied to its positions.
 //!
 //! **Writing** ([`write_solid`], [`write_world`]): GLB 2.0 with one buffer in the BIN
 //! chunk, a mesh of shared f32 vertices and u32 indices per body, a material per colour,
-//! the parts tree as the node hierarchy and cameras as perspective cameras (module `write`).
+//! the parts tree as the node hierarchy and cameras as perspective cameras (module
+//! `write`).
 //!
-//! Colours: glTF's `baseColorFactor` is linear RGB, winged's [`Color`](crate::model::Color) 8-bit sRGB; each
-//! direction converts.
+//! Colours: glTF's `baseColorFactor` is linear RGB, winged's
+//! [`Color`](crate::model::Color) 8-bit sRGB; each direction converts.
 
 mod scene;
 mod source;

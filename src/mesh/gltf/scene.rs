@@ -2,6 +2,7 @@
 //! scale, shear or mirror the file's transforms hold besides, applied to the positions.
 
 use std::collections::HashMap;
+use std::collections::hash_map::Entry;
 
 use ::gltf::json;
 use glam::{DAffine3, DMat3, DQuat, DVec3};
@@ -289,10 +290,10 @@ fn read_mesh(
         else {
             return Err(at("it has no POSITION".into()));
         };
-        if !cache.contains_key(&a) {
-            cache.insert(a, data.vec3_f32(a)?);
-        }
-        let vertices = cache.get(&a).map_or(0, Vec::len);
+        let vertices = match cache.entry(a) {
+            Entry::Occupied(e) => e.get().len(),
+            Entry::Vacant(e) => e.insert(data.vec3_f32(a)?).len(),
+        };
         if vertices > u32::MAX as usize {
             return Err(at(format!("{vertices} vertices are too many")));
         }
