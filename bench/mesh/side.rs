@@ -22,7 +22,7 @@ use glam::DVec3;
 use serde_json::json;
 use winged::mesh::write::Solid;
 use winged::mesh::{Format, ImportOptions, import};
-use winged::model::{Body, Color, Pose, Serials};
+use winged::model::{Color, Pose};
 
 #[derive(Parser)]
 struct Cli {
@@ -101,29 +101,23 @@ fn run(name: &str, bytes: &[u8], repeat: usize) -> Result<(), String> {
         check_crossings: false,
         ..ImportOptions::default()
     };
-    // The import as the server does it: the file to bodies, then each body built and
-    // checked for the world (the plan of the import_bodies edit).
-    let import_and_build = |options: &ImportOptions| -> Result<Vec<Body>, String> {
-        let imported = import(Format::Stl, bytes, options).map_err(|e| e.to_string())?;
-        imported
-            .bodies
-            .iter()
-            .map(|b| {
-                let faces: Vec<&[u32]> = b.faces.iter().collect();
-                Body::from_polygons(&mut Serials::new(), &b.positions, &faces)
-                    .map_err(|e| e.to_string())
-            })
-            .collect()
-    };
+    // The import as the server does it: the file to bodies built and checked, ready
+    // for the world's owner to insert.
+    let import_and_build =
+        |options: &ImportOptions| import(Format::Stl, bytes, options).map_err(|e| e.to_string());
     let (read_ms, scene) = best(repeat, || winged::mesh::read(Format::Stl, bytes, &options));
     let triangles = scene.map_err(|e| e.to_string())?.face_count();
     let (import_ms, bodies) = best(repeat, || import_and_build(&options));
     let bodies = bodies?;
     let (unchecked_ms, _) = best(repeat, || import_and_build(&unchecked));
-    let body = bodies.first().ok_or("no body")?;
+    let body = bodies.built.first().ok_or("no body")?.body();
     let solid = Solid::from_body(1, None, Color([200, 200, 200]), body, &Pose::IDENTITY);
-    let (stl_ms, stl_bytes) = best(repeat, || winged::mesh::write::stl::write(std::slice::from_ref(&solid)));
-    let (obj_ms, obj_bytes) = best(repeat, || winged::mesh::write::obj::write(std::slice::from_ref(&solid)));
+    let (stl_ms, stl_bytes) = best(repeat, || {
+        winged::mesh::write::stl::write(std::slice::from_ref(&solid))
+    });
+    let (obj_ms, obj_bytes) = best(repeat, || {
+        winged::mesh::write::obj::write(std::slice::from_ref(&solid))
+    });
     let (glb_ms, glb_bytes) = best(repeat, || winged::mesh::gltf::write_solid(&solid));
     let (solid_ms, _) = best(repeat, || {
         Solid::from_body(1, None, Color([200, 200, 200]), body, &Pose::IDENTITY)
@@ -160,7 +154,11 @@ fn sphere(segments: usize, rings: usize) -> Vec<[DVec3; 3]> {
         }
         let theta = PI * j as f64 / rings as f64;
         let phi = TAU * (i % segments) as f64 / segments as f64;
-        DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+        DVec3::new(
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        )
     };
     let mut out = Vec::with_capacity(2 * segments * rings);
     for j in 0..rings {
@@ -217,7 +215,11 @@ fn stl(tris: &[[DVec3; 3]]) -> Vec<u8> {
     out.extend_from_slice(&(tris.len() as u32).to_le_bytes());
     for t in tris {
         let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
-        for c in n.to_array().into_iter().chain(t.iter().flat_map(|p| p.to_array())) {
+        for c in n
+            .to_array()
+            .into_iter()
+            .chain(t.iter().flat_map(|p| p.to_array()))
+        {
             out.extend_from_slice(&(c as f32).to_le_bytes());
         }
         out.extend_from_slice(&[0, 0]);

@@ -16,4 +16,4 @@ pub mod command;
 pub mod plan;
 
 pub use apply::{Edit, EditError, MAX_BODY_FACES, Outcome, PieceOutcome, Place, apply};
-pub use plan::{HEAVY_FACES, Planned, plan, plan_expecting, plan_on};
+pub use plan::{HEAVY_FACES, Planned, plan, plan_expecting, plan_import, plan_on};

@@ -72,6 +72,40 @@ pub fn plan_expecting(edit: Box<Edit>, next: Serial) -> Result<Planned, EditErro
     Ok(Planned { edit, prepared })
 }
 
+/// Plans an import ([`Edit::ImportBodies`]) whose bodies are already built: `built[k]`
+/// is `bodies[k]` built by [`Built::new`] (or for any next serial) and checked, as
+/// [`crate::mesh`] leaves them. The owner then only inserts them.
+///
+/// Refused when the lists differ in length or a built body does not have the faces
+/// and vertices its entry lists (they were not built from it), or has too many faces.
+pub fn plan_import(
+    bodies: Vec<super::command::ImportedBody>,
+    built: Vec<Built>,
+) -> Result<Planned, EditError> {
+    let matches = bodies.len() == built.len()
+        && bodies.iter().zip(&built).all(|(b, built)| {
+            built.body().face_count() == b.faces.len()
+                && built.body().vertex_count() == b.vertices.len()
+        });
+    if !matches {
+        return Err(EditError::BadNumber(
+            "the built bodies are not those of the import".into(),
+        ));
+    }
+    for b in &bodies {
+        if b.faces.len() > super::apply::MAX_BODY_FACES {
+            return Err(EditError::TooLarge {
+                faces: b.faces.len(),
+                max: super::apply::MAX_BODY_FACES,
+            });
+        }
+    }
+    Ok(Planned {
+        edit: Box::new(Edit::ImportBodies { bodies }),
+        prepared: Prepared::Bodies(built),
+    })
+}
+
 /// Plans `edit` with a snapshot of the world at hand: as [`plan_expecting`], and a
 /// boolean ([`Edit::Boolean`]) is solved on the snapshot, so that the owner only places
 /// its result, if the world is still on the same basis when the plan is applied (else

@@ -89,8 +89,12 @@ impl fmt::Display for Where {
             write!(f, ", face{s} {}", list(&self.faces))?;
         }
         if !self.vertices.is_empty() {
-            let s = if self.vertices.len() == 1 { "" } else { "s" };
-            write!(f, ", vertex{s} {}", list(&self.vertices))?;
+            let what = if self.vertices.len() == 1 {
+                "vertex"
+            } else {
+                "vertices"
+            };
+            write!(f, ", {what} {}", list(&self.vertices))?;
         }
         if !self.points.is_empty() {
             let pts: Vec<String> = self

@@ -32,11 +32,13 @@ use unicode_normalization::UnicodeNormalization;
 
 use super::error::{Defect, Where};
 use super::{ImportError, ImportOptions, Map, Polygons, RawObject, RawScene, Unit};
-use crate::model::boolean::crossing::first_crossing;
+use rayon::prelude::*;
+
+use crate::model::boolean::crossing::Crossings;
 use crate::model::parts::validate_name;
 use crate::model::solids::BuildError;
 use crate::model::triangulate::FaceTriangulator;
-use crate::model::{Body, Color, Pose, Serials, check_solid};
+use crate::model::{Body, Built, Color, Pose, WorldError, check_solid};
 
 /// The largest angle between a merged face's normal and the normal of a face merged
 /// into it: 1°.
@@ -73,10 +75,33 @@ pub struct MeshBody {
 }
 
 /// The bodies a file made.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct Imported {
     /// The bodies, parents before their parts.
     pub bodies: Vec<MeshBody>,
+    /// Each body built from its polygons and checked, numbered for a world whose next
+    /// serial is 1 (see [`Built`]): what inserting them takes, so that the world's
+    /// owner need not build them again.
+    pub built: Vec<Built>,
+}
+
+impl PartialEq for Imported {
+    /// The same bodies (the built ones follow from them).
+    fn eq(&self, other: &Self) -> bool {
+        self.bodies == other.bodies
+    }
+}
+
+/// Why a piece did not build: the builder's refusal, or the world's checks of the loci.
+enum Refusal {
+    Build(BuildError),
+    World(WorldError),
+}
+
+impl From<WorldError> for Refusal {
+    fn from(e: WorldError) -> Self {
+        Refusal::World(e)
+    }
 }
 
 /// Makes bodies of `scene`'s objects (see the module's steps).
@@ -133,6 +158,7 @@ pub fn bodies(scene: RawScene, options: &ImportOptions) -> Result<Imported, Impo
                 faces_read: piece.faces_read,
                 unmerged: piece.unmerged,
             });
+            out.built.push(piece.built);
         }
     }
     Ok(out)
@@ -162,12 +188,13 @@ fn unique(names: &mut Map<String, usize>, base: String) -> String {
     }
 }
 
-/// One connected piece of an object, ready to build.
+/// One connected piece of an object, built.
 struct Piece {
     positions: Vec<DVec3>,
     faces: Polygons,
     faces_read: usize,
     unmerged: usize,
+    built: Built,
 }
 
 /// The object's surface as welded faces with their edges matched.
@@ -261,6 +288,15 @@ fn pieces(
         face_of: Vec::new(),
         twin: Vec::new(),
     };
+    let clock = std::time::Instant::now();
+    let lap = |stage: &str| {
+        tracing::debug!(
+            object = index,
+            stage,
+            ms = clock.elapsed().as_secs_f64() * 1e3,
+            "mesh import"
+        );
+    };
     // 1–2. Units, finite numbers, indices.
     if let Some(v) = object.positions.iter().position(|p| !p.is_finite()) {
         return Err(s.invalid(Defect::NotFinite, &[], &[v as u32], String::new()));
@@ -283,6 +319,7 @@ fn pieces(
     }
     // 3. Weld.
     s.rep = weld(&s.points, options.weld);
+    lap("welded");
     // 4. Faces, in representatives; degenerate ones refused.
     s.faces = Polygons::with_capacity(object.faces.len(), object.faces.corners.len());
     let mut face = Vec::new();
@@ -311,8 +348,10 @@ fn pieces(
         }
         s.faces.push(&face);
     }
+    lap("faces checked");
     // 5. Edges.
     match_edges(&mut s)?;
+    lap("edges matched");
     // 6. Pieces.
     let piece_of = components(&s);
     let count = piece_of.iter().map(|&p| p as usize + 1).max().unwrap_or(0);
@@ -322,16 +361,25 @@ fn pieces(
     }
     let mut out = Vec::with_capacity(count);
     for faces in &members {
-        // 7. Crossings.
-        if options.check_crossings {
-            check_crossings(&s, faces)?;
-        }
-        // 8. Merge.
-        let (polygons, unmerged) = if options.merge_coplanar {
-            merge(&s, faces, options.coplanar_tolerance)
-        } else {
-            (faces.iter().map(|&f| Ring::Face(f)).collect(), 0)
-        };
+        // 7–8. Crossings and merging, side by side: both only read the surface.
+        let (crossed, (polygons, unmerged)) = rayon::join(
+            || {
+                if options.check_crossings {
+                    check_crossings(&s, faces)
+                } else {
+                    Ok(())
+                }
+            },
+            || {
+                if options.merge_coplanar {
+                    merge(&s, faces, options.coplanar_tolerance)
+                } else {
+                    (faces.iter().map(|&f| Ring::Face(f)).collect(), 0)
+                }
+            },
+        );
+        crossed?;
+        lap("crossings checked and faces merged");
         // 9. Build.
         if polygons.len() > options.max_faces {
             return Err(ImportError::TooLarge {
@@ -341,6 +389,7 @@ fn pieces(
             });
         }
         out.push(build(&s, faces, &polygons, unmerged)?);
+        lap("built");
     }
     Ok(out)
 }
@@ -420,14 +469,32 @@ fn match_edges(s: &mut Surface<'_>) -> Result<(), ImportError> {
         let len = s.half_edges(f).len();
         s.face_of.extend(std::iter::repeat_n(f as u32, len));
     }
-    let mut keyed: Vec<(u64, u32)> = (0..nh)
-        .map(|h| {
-            let (a, b) = (s.start(h), s.start(s.next(h)));
-            let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-            (key, h as u32)
-        })
-        .collect();
-    keyed.sort_unstable();
+    // Half-edges ordered by edge (lower end, then higher end): a counting sort on the
+    // lower end, then each vertex's few half-edges sorted in place.
+    let key = |h: usize| {
+        let (a, b) = (s.start(h), s.start(s.next(h)));
+        (u64::from(a.min(b)) << 32) | u64::from(a.max(b))
+    };
+    let nv = s.points.len();
+    let mut at = vec![0u32; nv + 1];
+    for h in 0..nh {
+        at[(key(h) >> 32) as usize + 1] += 1;
+    }
+    for v in 0..nv {
+        at[v + 1] += at[v];
+    }
+    let mut keyed: Vec<(u64, u32)> = vec![(0, 0); nh];
+    let mut fill = at.clone();
+    for h in 0..nh {
+        let k = key(h);
+        let slot = &mut fill[(k >> 32) as usize];
+        keyed[*slot as usize] = (k, h as u32);
+        *slot += 1;
+    }
+    drop(fill);
+    for v in 0..nv {
+        keyed[at[v] as usize..at[v + 1] as usize].sort_unstable();
+    }
     s.twin = vec![u32::MAX; nh];
     let mut i = 0;
     let mut problem: Option<(Defect, usize, usize)> = None;
@@ -543,10 +610,15 @@ fn check_crossings(s: &Surface<'_>, faces: &[u32]) -> Result<(), ImportError> {
             owner.push(f);
         }
     }
-    // Triangles of one face share its plane and never cross.
-    if let Some((i, j)) = first_crossing(&s.points, &triangles)
-        && owner[i] != owner[j]
-    {
+    // Triangles of one face share its plane and never cross. The search runs in
+    // chunks on rayon's threads; the least pair found wins, as a single search would.
+    let index = Crossings::new(&s.points, &triangles);
+    let parts = index.parts(64 * rayon::current_num_threads());
+    let found = parts
+        .into_par_iter()
+        .filter_map(|part| index.first_in(part, |i, j| owner[i] == owner[j]))
+        .min();
+    if let Some((i, j)) = found {
         let (f, g) = (owner[i] as usize, owner[j] as usize);
         return Err(s.invalid(
             Defect::SelfIntersection,
@@ -575,32 +647,40 @@ fn merge(s: &Surface<'_>, faces: &[u32], tolerance: f64) -> (Vec<Ring>, usize) {
     );
     let tol = tolerance * lo.distance(hi);
     let cos_angle = MERGE_ANGLE.cos();
-    let mut normal: Map<u32, (DVec3, f64)> = Map::default();
-    normal.reserve(faces.len());
+    // Indexed by face of the whole surface; only this piece's faces are filled.
+    let nf = s.faces.len();
+    let mut normal = vec![(DVec3::ZERO, 0.0f64); nf];
     for &f in faces {
         let (n, _) = newell_and_longest(&s.points, s.faces.face(f as usize));
-        normal.insert(f, (n.normalize(), n.length()));
+        normal[f as usize] = (n.normalize(), n.length());
     }
-    let mut seeds = faces.to_vec();
-    seeds.sort_by(|a, b| normal[b].1.total_cmp(&normal[a].1).then(a.cmp(b)));
-    let mut region: Map<u32, u32> = Map::default();
-    region.reserve(faces.len());
-    let mut regions: Vec<Vec<u32>> = Vec::new();
+    // Largest first, then by face: areas are not negative, so their bits order them.
+    let mut keyed: Vec<(std::cmp::Reverse<u64>, u32)> = faces
+        .iter()
+        .map(|&f| (std::cmp::Reverse(normal[f as usize].1.to_bits()), f))
+        .collect();
+    keyed.par_sort_unstable();
+    let seeds: Vec<u32> = keyed.into_iter().map(|(_, f)| f).collect();
+    const NONE: u32 = u32::MAX;
+    let mut region = vec![NONE; nf];
+    // Region r's faces are members[starts[r]..starts[r + 1]].
+    let mut members: Vec<u32> = Vec::with_capacity(faces.len());
+    let mut starts: Vec<usize> = vec![0];
     let mut stack = Vec::new();
     for &seed in &seeds {
-        if region.contains_key(&seed) {
+        if region[seed as usize] != NONE {
             continue;
         }
-        let r = regions.len() as u32;
-        let n = normal[&seed].0;
+        let r = (starts.len() - 1) as u32;
+        let n = normal[seed as usize].0;
         let origin = s.points[s.faces.face(seed as usize)[0] as usize];
-        let mut members = vec![seed];
-        region.insert(seed, r);
+        members.push(seed);
+        region[seed as usize] = r;
         stack.push(seed);
         while let Some(f) = stack.pop() {
             for h in s.half_edges(f as usize) {
                 let g = s.face_of[s.twin[h] as usize];
-                if region.contains_key(&g) || normal[&g].0.dot(n) < cos_angle {
+                if region[g as usize] != NONE || normal[g as usize].0.dot(n) < cos_angle {
                     continue;
                 }
                 let flat = s
@@ -609,23 +689,25 @@ fn merge(s: &Surface<'_>, faces: &[u32], tolerance: f64) -> (Vec<Ring>, usize) {
                     .iter()
                     .all(|&v| (s.points[v as usize] - origin).dot(n).abs() <= tol);
                 if flat {
-                    region.insert(g, r);
+                    region[g as usize] = r;
                     members.push(g);
                     stack.push(g);
                 }
             }
         }
-        regions.push(members);
+        starts.push(members.len());
     }
-    let mut rings: Vec<(u32, Ring)> = Vec::with_capacity(regions.len());
+    let mut rings: Vec<(u32, Ring)> = Vec::with_capacity(starts.len());
     let mut unmerged = 0;
-    for (r, members) in regions.iter().enumerate() {
+    let mut scratch = Vec::new();
+    for r in 0..starts.len() - 1 {
+        let members = &members[starts[r]..starts[r + 1]];
         let lowest = members.iter().copied().min().unwrap_or(0);
         if members.len() == 1 {
             rings.push((lowest, Ring::Face(lowest)));
             continue;
         }
-        match outline(s, members, &region, r as u32) {
+        match outline(s, members, &region, r as u32, &mut scratch) {
             Some(ring) => rings.push((lowest, Ring::Merged(ring, lowest))),
             None => {
                 unmerged += 1;
@@ -633,28 +715,41 @@ fn merge(s: &Surface<'_>, faces: &[u32], tolerance: f64) -> (Vec<Ring>, usize) {
             }
         }
     }
-    rings.sort_by_key(|(lowest, _)| *lowest);
+    rings.sort_unstable_by_key(|(lowest, _)| *lowest);
     (rings.into_iter().map(|(_, r)| r).collect(), unmerged)
 }
 
 /// The one simple ring around region `r`'s faces, `None` when the outline is several
-/// rings (a hole) or passes a vertex twice.
-fn outline(s: &Surface<'_>, members: &[u32], region: &Map<u32, u32>, r: u32) -> Option<Vec<u32>> {
-    let mut from: Map<u32, usize> = Map::default();
-    let mut count = 0usize;
+/// rings (a hole) or passes a vertex twice. `scratch` is kept between calls.
+fn outline(
+    s: &Surface<'_>,
+    members: &[u32],
+    region: &[u32],
+    r: u32,
+    scratch: &mut Vec<(u32, usize)>,
+) -> Option<Vec<u32>> {
+    // The outline's half-edges by start vertex.
+    scratch.clear();
     for &f in members {
         for h in s.half_edges(f as usize) {
             let g = s.face_of[s.twin[h] as usize];
-            if region.get(&g) == Some(&r) {
-                continue;
+            if region[g as usize] != r {
+                scratch.push((s.start(h), h));
             }
-            if from.insert(s.start(h), h).is_some() {
-                return None;
-            }
-            count += 1;
         }
     }
-    let (&first, &h0) = from.iter().min_by_key(|(v, _)| **v)?;
+    scratch.sort_unstable();
+    if scratch.windows(2).any(|w| w[0].0 == w[1].0) {
+        return None;
+    }
+    let count = scratch.len();
+    let (first, h0) = *scratch.first()?;
+    let from = |v: u32| -> Option<usize> {
+        scratch
+            .binary_search_by_key(&v, |&(start, _)| start)
+            .ok()
+            .map(|k| scratch[k].1)
+    };
     let mut ring = Vec::with_capacity(count);
     let mut h = h0;
     loop {
@@ -663,7 +758,7 @@ fn outline(s: &Surface<'_>, members: &[u32], region: &Map<u32, u32>, r: u32) -> 
         if end == first {
             break;
         }
-        h = *from.get(&end)?;
+        h = from(end)?;
         if ring.len() > count {
             return None;
         }
@@ -680,15 +775,15 @@ fn build(
     unmerged: usize,
 ) -> Result<Piece, ImportError> {
     let mut used = vec![false; s.points.len()];
-    let ring_of = |ring: &Ring| -> Vec<u32> {
+    fn corners<'a>(s: &'a Surface<'_>, ring: &'a Ring) -> &'a [u32] {
         match ring {
-            Ring::Face(f) => s.faces.face(*f as usize).to_vec(),
-            Ring::Merged(r, _) => r.clone(),
+            Ring::Face(f) => s.faces.face(*f as usize),
+            Ring::Merged(r, _) => r,
         }
-    };
-    let lists: Vec<Vec<u32>> = rings.iter().map(ring_of).collect();
-    for list in &lists {
-        for &v in list {
+    }
+    let ring_of = |ring| corners(s, ring);
+    for ring in rings {
+        for &v in ring_of(ring) {
             used[v as usize] = true;
         }
     }
@@ -702,13 +797,13 @@ fn build(
             positions.push(s.points[v]);
         }
     }
-    let corners: usize = lists.iter().map(Vec::len).sum();
-    let mut polygons = Polygons::with_capacity(lists.len(), corners);
-    let mut mapped = Vec::new();
-    for list in &lists {
-        mapped.clear();
-        mapped.extend(list.iter().map(|&v| local[v as usize]));
-        polygons.push(&mapped);
+    let corners: usize = rings.iter().map(|r| ring_of(r).len()).sum();
+    let mut polygons = Polygons::with_capacity(rings.len(), corners);
+    for ring in rings {
+        polygons
+            .corners
+            .extend(ring_of(ring).iter().map(|&v| local[v as usize]));
+        polygons.ends.push(polygons.corners.len() as u32);
     }
     let face_of_ring = |k: usize| -> usize {
         match &rings[k] {
@@ -717,7 +812,16 @@ fn build(
         }
     };
     let refs: Vec<&[u32]> = polygons.iter().collect();
-    let body = Body::from_polygons(&mut Serials::new(), &positions, &refs).map_err(|e| {
+    let built = Built::new(|serials| {
+        Body::from_polygons(serials, &positions, &refs).map_err(Refusal::Build)
+    })
+    .map_err(|e| {
+        let e = match e {
+            Refusal::Build(e) => e,
+            Refusal::World(e) => {
+                return s.invalid(Defect::OutOfRange, &[], &[], e.to_string());
+            }
+        };
         let (defect, fs, vs): (Defect, Vec<usize>, Vec<u32>) = match &e {
             BuildError::NonManifoldVertex { vertex } => (
                 Defect::NonManifoldVertex,
@@ -745,8 +849,9 @@ fn build(
         };
         s.invalid(defect, &fs, &vs, e.to_string())
     })?;
+    let body = built.body();
     let diagonal = body.bounds().map_or(0.0, |b| b.diagonal());
-    let report = check_solid(&body, SOLID_TOLERANCE * diagonal.max(f64::MIN_POSITIVE));
+    let report = check_solid(body, SOLID_TOLERANCE * diagonal.max(f64::MIN_POSITIVE));
     if !report.is_ok() {
         let first = report
             .violations
@@ -755,10 +860,12 @@ fn build(
             .unwrap_or_default();
         return Err(s.invalid(Defect::Other, &[], &[], first));
     }
+    drop(refs);
     Ok(Piece {
         positions,
         faces: polygons,
         faces_read: faces.len(),
         unmerged,
+        built,
     })
 }

@@ -253,6 +253,16 @@ impl Handle {
     /// on a blocking thread), then queued for the owner.
     pub async fn apply_if(&self, edit: Edit, expected: Option<u64>) -> Result<Applied, WriteError> {
         let planned = self.plan(edit).await?;
+        self.apply_planned_if(planned, expected).await
+    }
+
+    /// [`Handle::apply_if`] for an edit already planned (an import whose bodies were
+    /// built where the file was read).
+    pub async fn apply_planned_if(
+        &self,
+        planned: Planned,
+        expected: Option<u64>,
+    ) -> Result<Applied, WriteError> {
         let (reply, rx) = oneshot::channel();
         let cmd = Command::Apply {
             planned,

@@ -132,8 +132,68 @@ impl Tree {
                 out.push((i, j));
             }
         };
+        self.self_pairs_under(boxes, (0, 0), &mut test, out);
+    }
+
+    /// Splits the search of [`Tree::self_pairs`] into independent parts, about `parts`
+    /// of them: each is a pair of nodes, `(n, n)` standing for the pairs within `n`'s
+    /// subtree. Together they cover every pair once.
+    pub fn self_pair_parts(&self, parts: usize) -> Vec<(usize, usize)> {
+        let mut out = vec![(0usize, 0usize)];
+        if self.order.is_empty() {
+            return Vec::new();
+        }
+        while out.len() < parts {
+            let before = out.len();
+            let mut next = Vec::with_capacity(3 * out.len());
+            for (n, m) in out {
+                let (a, b) = (&self.nodes[n], &self.nodes[m]);
+                if n == m && a.count == 0 {
+                    let (l, r) = (a.start as usize, a.start as usize + 1);
+                    next.extend([(l, l), (r, r), (l, r)]);
+                } else if n != m && (a.count == 0 || b.count == 0) {
+                    if meet([a.lo, a.hi], [b.lo, b.hi]) {
+                        next.extend(descend(a, b, n, m));
+                    }
+                } else {
+                    next.push((n, m));
+                }
+            }
+            out = next;
+            if out.len() == before {
+                break;
+            }
+        }
+        out
+    }
+
+    /// [`Tree::self_pairs`] for one part of [`Tree::self_pair_parts`], `out` not
+    /// cleared.
+    pub fn self_pairs_in(
+        &self,
+        boxes: &[[DVec3; 2]],
+        part: (usize, usize),
+        mut keep: impl FnMut(u32, u32) -> bool,
+        out: &mut Vec<(u32, u32)>,
+    ) {
+        let mut test = |i: u32, j: u32, out: &mut Vec<(u32, u32)>| {
+            let (i, j) = (i.min(j), i.max(j));
+            if meet(boxes[i as usize], boxes[j as usize]) && keep(i, j) {
+                out.push((i, j));
+            }
+        };
+        self.self_pairs_under(boxes, part, &mut test, out);
+    }
+
+    fn self_pairs_under(
+        &self,
+        _boxes: &[[DVec3; 2]],
+        part: (usize, usize),
+        test: &mut impl FnMut(u32, u32, &mut Vec<(u32, u32)>),
+        out: &mut Vec<(u32, u32)>,
+    ) {
         // A node paired with itself stands for the pairs within its subtree.
-        let mut stack = vec![(0usize, 0usize)];
+        let mut stack = vec![part];
         while let Some((n, m)) = stack.pop() {
             let (a, b) = (&self.nodes[n], &self.nodes[m]);
             if n == m {

@@ -19,7 +19,6 @@ use super::extract::{ApiPath, ApiQuery};
 
 use super::precondition::{IfMatch, etag};
 use super::{Answer, snapshot};
-use crate::edit::Edit;
 use crate::edit::command::{FaceList, ImportedBody};
 use crate::mesh::write::{ExportError, Frame};
 use crate::mesh::{Format, ImportError, Imported};
@@ -182,7 +181,7 @@ async fn place_bodies(
     place: Place,
     expected: Option<u64>,
 ) -> Answer {
-    let Imported { bodies } = imported;
+    let Imported { bodies, built } = imported;
     let mut edits = Vec::with_capacity(bodies.len());
     let mut about = Vec::with_capacity(bodies.len());
     for (k, b) in bodies.into_iter().enumerate() {
@@ -211,8 +210,8 @@ async fn place_bodies(
             faces,
         });
     }
-    let edit = Edit::ImportBodies { bodies: edits };
-    let Applied { outcome, revision } = h.apply_if(edit, expected).await?;
+    let planned = crate::edit::plan_import(edits, built).map_err(Problem::internal)?;
+    let Applied { outcome, revision } = h.apply_planned_if(planned, expected).await?;
     let placed = outcome.pieces.unwrap_or_default();
     let snapshot = snapshot(h).await.ok();
     let bodies: Vec<ImportedDto> = placed

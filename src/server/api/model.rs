@@ -20,8 +20,7 @@ use crate::server::dto::{
 };
 use crate::server::problem::Problem;
 use crate::server::request::{
-    BooleanReq, CopyReq, CreateBody, EulerOp, HexColor, NewBody, PatchBody, SweepReq,
-    TransformReq,
+    BooleanReq, CopyReq, CreateBody, EulerOp, HexColor, NewBody, PatchBody, SweepReq, TransformReq,
 };
 
 pub(super) async fn world(State(h): State<Handle>) -> Answer {
@@ -51,10 +50,7 @@ fn body_dto(w: &World, b: BodyId) -> Option<BodyDto> {
         parts: node.parts.iter().map(|p| p.get()).collect(),
         pose: node.pose.into(),
         world_pose: w.world_pose(b)?.into(),
-        color: HexColor(
-            node.color
-                .unwrap_or_else(|| crate::model::default_color(b)),
-        ),
+        color: HexColor(node.color.unwrap_or_else(|| crate::model::default_color(b))),
         euler: euler_of(body),
         volume: body.volume(),
         area: body.surface_area(),
@@ -201,7 +197,13 @@ fn topology_dto(w: &World, b: BodyId) -> TopologyDto {
 pub(super) async fn create_body(State(h): State<Handle>, req: WriteJson<CreateBody>) -> Answer {
     match NewBody::from(req.value) {
         NewBody::Solid(create) => {
-            write(&h, Edit::CreateBody(create), req.expected, StatusCode::CREATED).await
+            write(
+                &h,
+                Edit::CreateBody(create),
+                req.expected,
+                StatusCode::CREATED,
+            )
+            .await
         }
         NewBody::Mesh(mesh) => super::mesh::create(&h, mesh, req.expected).await,
     }
