@@ -46,8 +46,11 @@ enum Command {
     },
 }
 
+/// Makes a case's triangles.
+type Triangles = fn() -> Vec<[DVec3; 3]>;
+
 /// The cases: file name, and how the triangles are made.
-const CASES: [(&str, fn() -> Vec<[DVec3; 3]>); 3] = [
+const CASES: [(&str, Triangles); 3] = [
     ("sphere-1m.stl", || sphere(1000, 501)),
     ("grid-box-1m.stl", || grid_box(289)),
     ("sphere-100k.stl", || sphere(316, 159)),

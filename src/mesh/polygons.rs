@@ -118,15 +118,28 @@ pub fn bodies(scene: RawScene, options: &ImportOptions) -> Result<Imported, Impo
     let mut out = Imported::default();
     // The body each object became (its first piece), or the one its parent became.
     let mut body_of: Vec<Option<usize>> = Vec::with_capacity(scene.objects.len());
+    // Each object's frame in the frame of the body it hangs under: the identity for an
+    // object that became a body, its pose composed down from there for one without
+    // faces (whose parts then hang under that body with the poses composed).
+    let mut carry: Vec<Pose> = Vec::with_capacity(scene.objects.len());
     let mut names: Map<String, usize> = Map::default();
     for (index, object) in scene.objects.iter().enumerate() {
         let parent = object
             .parent
             .and_then(|p| body_of.get(p).copied().flatten());
+        let base = object
+            .parent
+            .and_then(|p| carry.get(p).copied())
+            .unwrap_or(Pose::IDENTITY);
+        let mut own = object.pose;
+        own.position *= scale;
+        let placed = base.compose(&own);
         if object.faces.is_empty() {
             body_of.push(parent);
+            carry.push(placed);
             continue;
         }
+        carry.push(Pose::IDENTITY);
         let pieces = pieces(index, object, scale, options)?;
         let first = out.bodies.len();
         body_of.push(Some(first));
@@ -141,9 +154,7 @@ pub fn bodies(scene: RawScene, options: &ImportOptions) -> Result<Imported, Impo
                 unique(&mut names, base)
             });
             let (parent, pose) = if k == 0 {
-                let mut pose = object.pose;
-                pose.position *= scale;
-                (parent, pose)
+                (parent, placed)
             } else {
                 (Some(first), Pose::IDENTITY)
             };
@@ -379,6 +390,11 @@ fn pieces(
             },
         );
         crossed?;
+        let polygons = if options.merge_coplanar {
+            drop_collinear(&s, polygons, options.coplanar_tolerance)
+        } else {
+            polygons
+        };
         lap("crossings checked and faces merged");
         // 9. Build.
         if polygons.len() > options.max_faces {
@@ -766,6 +782,112 @@ fn outline(
     (ring.len() == count).then_some(ring)
 }
 
+/// Drops the vertices that merging left on a straight side between two faces: a
+/// vertex in exactly two rings (so of degree two), in a run of such vertices that all
+/// lie within `tolerance` × the piece's diagonal of the segment between the run's ends.
+/// A ring that would keep fewer than three corners keeps them all (and so does the other
+/// ring of those vertices), so both faces along a side always agree.
+fn drop_collinear(s: &Surface<'_>, rings: Vec<Ring>, tolerance: f64) -> Vec<Ring> {
+    fn corners<'a>(s: &'a Surface<'_>, ring: &'a Ring) -> &'a [u32] {
+        match ring {
+            Ring::Face(f) => s.faces.face(*f as usize),
+            Ring::Merged(r, _) => r,
+        }
+    }
+    let n = s.points.len();
+    let mut count = vec![0u8; n];
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for ring in &rings {
+        for &v in corners(s, ring) {
+            count[v as usize] = count[v as usize].saturating_add(1);
+            lo = lo.min(s.points[v as usize]);
+            hi = hi.max(s.points[v as usize]);
+        }
+    }
+    let tol = tolerance * lo.distance(hi);
+    let candidate = |v: u32| count[v as usize] == 2;
+    // Pass 1: vertices whose run is straight.
+    let mut straight = vec![false; n];
+    let mut any = false;
+    for ring in &rings {
+        let c = corners(s, ring);
+        let Some(anchor) = c.iter().position(|&v| !candidate(v)) else {
+            continue;
+        };
+        let len = c.len();
+        let mut k = 0;
+        while k < len {
+            let start = (anchor + k) % len;
+            if candidate(c[start]) {
+                let mut end = k;
+                while end < len && candidate(c[(anchor + end) % len]) {
+                    end += 1;
+                }
+                let a = s.points[c[(anchor + k + len - 1) % len] as usize];
+                let b = s.points[c[(anchor + end) % len] as usize];
+                let run = (k..end).map(|j| c[(anchor + j) % len]);
+                let ok = run
+                    .clone()
+                    .all(|v| distance_to_segment(s.points[v as usize], a, b) <= tol);
+                if ok {
+                    for v in run {
+                        straight[v as usize] = true;
+                        any = true;
+                    }
+                }
+                k = end;
+            } else {
+                k += 1;
+            }
+        }
+    }
+    if !any {
+        return rings;
+    }
+    // Pass 2: rings that would fall below three corners keep theirs.
+    let mut keep = vec![false; n];
+    for ring in &rings {
+        let c = corners(s, ring);
+        let left = c.iter().filter(|&&v| !straight[v as usize]).count();
+        if left < 3 {
+            for &v in c {
+                keep[v as usize] = true;
+            }
+        }
+    }
+    rings
+        .into_iter()
+        .map(|ring| {
+            let c = corners(s, &ring);
+            if !c.iter().any(|&v| straight[v as usize] && !keep[v as usize]) {
+                return ring;
+            }
+            let lowest = match ring {
+                Ring::Face(f) => f,
+                Ring::Merged(_, lowest) => lowest,
+            };
+            let kept: Vec<u32> = c
+                .iter()
+                .copied()
+                .filter(|&v| !straight[v as usize] || keep[v as usize])
+                .collect();
+            Ring::Merged(kept, lowest)
+        })
+        .collect()
+}
+
+/// The distance from `p` to the segment `a`–`b`.
+fn distance_to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    let t = if len2 > 0.0 {
+        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + ab * t)
+}
+
 /// The piece's polygons with its vertices numbered in the file's order; checked by
 /// building the body.
 fn build(
@@ -868,4 +990,118 @@ fn build(
         unmerged,
         built,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit tetrahedron's faces, counter-clockwise seen from outside.
+    fn tetra() -> (Vec<DVec3>, Polygons) {
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        let mut f = Polygons::default();
+        for face in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
+            f.push(&face);
+        }
+        (p, f)
+    }
+
+    #[test]
+    fn an_object_without_faces_passes_its_pose_to_its_parts() {
+        let (positions, faces) = tetra();
+        let scene = RawScene {
+            objects: vec![
+                RawObject {
+                    name: Some("group".into()),
+                    pose: Pose::from_translation(DVec3::new(1.0, 0.0, 0.0)),
+                    ..RawObject::default()
+                },
+                RawObject {
+                    name: Some("part".into()),
+                    parent: Some(0),
+                    pose: Pose::from_translation(DVec3::new(0.0, 2.0, 0.0)),
+                    positions,
+                    faces,
+                    ..RawObject::default()
+                },
+            ],
+            unit: None,
+        };
+        let got = bodies(scene, &ImportOptions::default()).expect("imports");
+        assert_eq!(got.bodies.len(), 1);
+        let b = &got.bodies[0];
+        assert_eq!(b.parent, None);
+        assert_eq!(b.pose.position, DVec3::new(1.0, 2.0, 0.0));
+        assert_eq!(got.built.len(), 1);
+        assert_eq!(got.built[0].body().face_count(), 4);
+    }
+
+    /// A 2 m box whose sides are `n × n` grids of squares, as triangles with their own
+    /// corners (welded by the import).
+    fn grid_box(n: usize) -> RawObject {
+        let mut positions = Vec::new();
+        let mut faces = Polygons::default();
+        for axis in 0..3 {
+            for sign in [-1.0, 1.0] {
+                let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                let p = |a: usize, b: usize| {
+                    let mut x = [0.0; 3];
+                    x[axis] = sign;
+                    x[u] = -1.0 + 2.0 * a as f64 / n as f64;
+                    x[v] = -1.0 + 2.0 * b as f64 / n as f64;
+                    DVec3::from_array(x)
+                };
+                for a in 0..n {
+                    for b in 0..n {
+                        let q = [p(a, b), p(a + 1, b), p(a + 1, b + 1), p(a, b + 1)];
+                        let tris = if sign > 0.0 {
+                            [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+                        } else {
+                            [[q[0], q[2], q[1]], [q[0], q[3], q[2]]]
+                        };
+                        for t in tris {
+                            let k = positions.len() as u32;
+                            positions.extend(t);
+                            faces.push(&[k, k + 1, k + 2]);
+                        }
+                    }
+                }
+            }
+        }
+        RawObject {
+            positions,
+            faces,
+            ..RawObject::default()
+        }
+    }
+
+    #[test]
+    fn a_box_of_grids_merges_to_six_quads_and_eight_vertices() {
+        let scene = RawScene {
+            objects: vec![grid_box(5)],
+            unit: None,
+        };
+        let got = bodies(scene, &ImportOptions::default()).expect("imports");
+        let b = &got.bodies[0];
+        assert_eq!(b.faces.len(), 6);
+        assert_eq!(
+            b.positions.len(),
+            8,
+            "the grid points on the edges are dropped"
+        );
+        assert!(b.faces.iter().all(|f| f.len() == 4));
+        assert!((got.built[0].body().volume() - 8.0).abs() < 1e-12);
+        // Without merging, every triangle stays and every vertex with it.
+        let scene = RawScene {
+            objects: vec![grid_box(5)],
+            unit: None,
+        };
+        let options = ImportOptions {
+            merge_coplanar: false,
+            ..ImportOptions::default()
+        };
+        let got = bodies(scene, &options).expect("imports");
+        assert_eq!(got.bodies[0].faces.len(), 300);
+        assert_eq!(got.bodies[0].positions.len(), 152);
+    }
 }
