@@ -258,6 +258,20 @@ pub struct PieceOutcome {
     pub sources: Vec<[u64; 3]>,
 }
 
+impl PieceOutcome {
+    /// Body `id`'s counts and volume, without sources.
+    fn of(id: BodyId, body: &Body) -> Self {
+        PieceOutcome {
+            id: id.get(),
+            faces: body.face_count(),
+            edges: body.edge_count(),
+            vertices: body.vertex_count(),
+            volume: body.volume(),
+            sources: Vec::new(),
+        }
+    }
+}
+
 /// Why an edit was refused.
 #[derive(Debug, thiserror::Error)]
 pub enum EditError {
@@ -665,15 +679,7 @@ fn import_bodies(
         let pose = b.pose.unwrap_or(Pose::IDENTITY);
         let id = next.insert_built(built, b.name.as_deref(), parent, pose, b.color)?;
         ids.push(id);
-        let body = body_of(&next, id);
-        placed.push(PieceOutcome {
-            id: id.get(),
-            faces: body.face_count(),
-            edges: body.edge_count(),
-            vertices: body.vertex_count(),
-            volume: body.volume(),
-            sources: Vec::new(),
-        });
+        placed.push(PieceOutcome::of(id, body_of(&next, id)));
     }
     *world = next;
     Ok(Outcome {
@@ -717,15 +723,7 @@ fn perception(
             }
             None => next.insert_perceived(piece.name.as_deref(), &shell)?,
         };
-        let body = body_of(&next, b);
-        placed.push(PieceOutcome {
-            id: b.get(),
-            faces: body.face_count(),
-            edges: body.edge_count(),
-            vertices: body.vertex_count(),
-            volume: body.volume(),
-            sources: Vec::new(),
-        });
+        placed.push(PieceOutcome::of(b, body_of(&next, b)));
     }
     *world = next;
     Ok(Outcome {
