@@ -3,9 +3,10 @@
 //! Each object or group of the file (`o`, `g`; tobj also starts a new one where the
 //! material changes) becomes one [`RawObject`]. Points and lines are ignored; material
 //! libraries (`mtllib`) are not opened (winged has no files beside the upload), so an
-//! OBJ's colours are not read.
+//! OBJ's colours are not read. Texture coordinates and normals (`vt`, `vn`) are not
+//! given to tobj at all (see [`Geometry`]).
 
-use std::io::BufReader;
+use std::io::{BufRead, Read};
 
 use glam::DVec3;
 
@@ -22,7 +23,7 @@ pub fn read(bytes: &[u8], options: &ImportOptions) -> Result<RawScene, ImportErr
         ignore_points: true,
         ignore_lines: true,
     };
-    let mut reader = BufReader::new(bytes);
+    let mut reader = Geometry::new(bytes);
     let (models, _materials) =
         tobj::load_obj_buf(&mut reader, &load, |_| Err(tobj::LoadError::OpenFileFailed)).map_err(
             |e| ImportError::Parse {
@@ -76,6 +77,68 @@ pub fn read(bytes: &[u8], options: &ImportOptions) -> Result<RawScene, ImportErr
         });
     }
     Ok(scene)
+}
+
+/// An OBJ file's lines without its `vt` and `vn` statements, as tobj reads them (a line
+/// whose first word, split at whitespace, is `vt` or `vn`).
+///
+/// winged uses neither, and tobj 4.0.5 multiplies a face's texture-coordinate and
+/// normal indices unchecked (`vt * 2 + 1`, `vn * 3 + 2`): an index before the start of
+/// the list (`f 1//-4` with fewer than four normals) wraps to a huge `usize`, which
+/// overflows there. Without those lists tobj never looks at those indices. A line that
+/// is not UTF-8 is kept, for tobj to refuse.
+struct Geometry<'a> {
+    /// What is left of the file.
+    rest: &'a [u8],
+    /// How many bytes at the start of `rest` are a kept line not yet read.
+    line: usize,
+}
+
+impl<'a> Geometry<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        Geometry {
+            rest: bytes,
+            line: 0,
+        }
+    }
+}
+
+/// Whether `line` is a `vt` or `vn` statement.
+fn is_attribute(line: &[u8]) -> bool {
+    std::str::from_utf8(line)
+        .ok()
+        .and_then(|l| l.split_whitespace().next())
+        .is_some_and(|word| word == "vt" || word == "vn")
+}
+
+impl BufRead for Geometry<'_> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        while self.line == 0 && !self.rest.is_empty() {
+            let len = memchr::memchr(b'\n', self.rest).map_or(self.rest.len(), |i| i + 1);
+            if is_attribute(&self.rest[..len]) {
+                self.rest = &self.rest[len..];
+            } else {
+                self.line = len;
+            }
+        }
+        Ok(&self.rest[..self.line])
+    }
+
+    fn consume(&mut self, amount: usize) {
+        let amount = amount.min(self.line);
+        self.rest = &self.rest[amount..];
+        self.line -= amount;
+    }
+}
+
+impl Read for Geometry<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let line = self.fill_buf()?;
+        let n = line.len().min(buf.len());
+        buf[..n].copy_from_slice(&line[..n]);
+        self.consume(n);
+        Ok(n)
+    }
 }
 
 #[cfg(test)]

@@ -298,3 +298,49 @@ fn an_empty_file_is_refused() {
         Err(ImportError::Empty)
     );
 }
+
+// Inputs found by coverage-guided fuzzing (fuzz/, `cargo fuzz`), minimised: each must
+// give a clean error or a result, never a panic.
+
+/// tobj 4.0.5 multiplied a face's normal or texture-coordinate index unchecked: an
+/// index before the start of its list (`1//-4` with fewer than four normals) wrapped to
+/// a huge `usize` and `vn * 3 + 2` overflowed. The reader no longer gives tobj the `vt`
+/// and `vn` lines.
+#[test]
+fn fuzz_obj_normal_and_texcoord_indices_out_of_range() {
+    for file in [
+        &b"f 1//-4 4 0\nv 1 3 4\nvn 0 0 0\n"[..],
+        b"vt 0 5\nv 0 5 0\nf 1/-4 4 /\n",
+        b"f 2//-6 6 6\nv 1 8 2\nv 1 1 4\nvn 1 0 0\n",
+        b"v 5 5 0\nvn 0 1 0\nf  1//-6 4 0\n",
+    ] {
+        let got = import(Format::Obj, file, &ImportOptions::default());
+        assert!(
+            matches!(got, Err(ImportError::Parse { .. })),
+            "{:?}: {got:?}",
+            String::from_utf8_lossy(file)
+        );
+    }
+    // Normals and texture coordinates, in range or not, do not change what is read.
+    let tetra = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\r\n  vt 0 0\n\
+                 f 1/1/1 3/1/1 2/1/9\nf 1//-7 2//1 4//1\nf 1/-5 4 3\nf 2 3 4\n";
+    let got = import(Format::Obj, tetra.as_bytes(), &ImportOptions::default()).expect("imports");
+    assert_eq!(got.bodies.len(), 1);
+    assert_eq!(got.bodies[0].faces.len(), 4);
+}
+
+/// A byte-order mark before a GLB header: the mark was stripped as for JSON after the
+/// GLB header's length had been looked for (not found), so the `gltf` crate read the
+/// header unchecked and subtracted 12 from a length of 1. The magic is now looked for
+/// after the mark.
+#[test]
+fn fuzz_gltf_byte_order_mark_before_a_glb_header() {
+    for format in [Format::Gltf, Format::Glb] {
+        let got = import(
+            format,
+            b"\xEF\xBB\xBFglTF\x02\0\0\0\x01\0\0\0",
+            &ImportOptions::default(),
+        );
+        assert!(matches!(got, Err(ImportError::Parse { .. })), "{got:?}");
+    }
+}

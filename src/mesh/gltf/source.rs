@@ -34,14 +34,14 @@ const POSITION_BUDGET: u64 = 2;
 /// [`ImportError::Parse`] for a broken container, JSON the glTF schema does not
 /// accept, or an index that names nothing. Never panics: the GLB header's length is
 /// checked before the `gltf` crate reads it, and every primitive's `POSITION` index
-/// before its validation looks that accessor up.
+/// before its validation looks that accessor up. A UTF-8 byte-order mark at the start
+/// is skipped, and the magic looked for after it (the `gltf` crate is given the bytes
+/// after the mark, and reads them as GLB when they start with `glTF`).
 pub(super) fn parse(bytes: &[u8]) -> Result<(json::Root, Option<Vec<u8>>), ImportError> {
-    let bytes = if bytes.starts_with(b"glTF") {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    if bytes.starts_with(b"glTF") {
         check_glb_header(bytes)?;
-        bytes
-    } else {
-        bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
-    };
+    }
     let gltf = ::gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| parse_error(e.to_string()))?;
     let blob = gltf.blob;
