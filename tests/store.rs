@@ -1144,7 +1144,7 @@ fn a_newer_journal_format_or_a_foreign_file_is_refused() {
     match Store::open(dir.path(), options()) {
         Err(StoreError::UnsupportedVersion {
             found, supported, ..
-        }) => assert_eq!((found, supported), (99, 1)),
+        }) => assert_eq!((found, supported), (99, 2)),
         other => panic!("expected an unsupported version, got {:?}", other.err()),
     }
     let other = tempfile::tempdir().unwrap();
@@ -1547,6 +1547,69 @@ fn a_journal_of_the_2026_11_format_recovers_to_the_world_it_recorded() {
     assert_eq!(rec.snapshot, None, "the fixture is a journal alone");
     assert!(rec.replayed > 100, "{} entries", rec.replayed);
     assert_eq!(fixture_form(&rec.world), want);
+    check_world(&rec.world).unwrap();
+}
+
+/// A journal of version 1 takes an entry of version 2 (an import, whose polygons are
+/// packed) with its version raised in the same commit, and recovers through both.
+#[test]
+fn a_version_one_journal_is_raised_to_version_two_by_its_first_append() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["journal.db", "reached"] {
+        std::fs::copy(Path::new(FIXTURE).join(name), dir.path().join(name)).unwrap();
+    }
+    let version = |dir: &Path| -> i64 {
+        rusqlite::Connection::open(dir.join("journal.db"))
+            .unwrap()
+            .query_row(
+                "SELECT value FROM meta WHERE key = 'format_version'",
+                [],
+                |r| r.get(0),
+            )
+            .unwrap()
+    };
+    let mut store = Store::open(dir.path(), options()).unwrap();
+    let mut world = store.recover(|_, _, _, _| {}).unwrap().world;
+    assert_eq!(
+        version(dir.path()),
+        1,
+        "opening and recovering write nothing"
+    );
+    let import: Edit = serde_json::from_value(json!({
+        "edit": "import_bodies",
+        "bodies": [{
+            "name": "imported tetrahedron",
+            "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+            "faces": [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        }],
+    }))
+    .unwrap();
+    apply(&mut world, &import).unwrap();
+    store
+        .append(
+            &as_entries(&[(world.revision(), &import)]),
+            world.next_serial(),
+        )
+        .unwrap();
+    drop(store);
+    assert_eq!(version(dir.path()), 2);
+    let stored: String = rusqlite::Connection::open(dir.path().join("journal.db"))
+        .unwrap()
+        .query_row(
+            "SELECT edit FROM journal ORDER BY revision DESC LIMIT 1",
+            [],
+            |r| r.get(0),
+        )
+        .unwrap();
+    let stored: Value = serde_json::from_str(&stored).unwrap();
+    let body = &stored["bodies"][0];
+    assert!(
+        body["vertices"].is_string() && body["faces"].is_string(),
+        "packed: {stored}"
+    );
+    let mut store = Store::open(dir.path(), options()).unwrap();
+    let rec = store.recover(|_, _, _, _| {}).unwrap();
+    assert_eq!(fixture_form(&rec.world), fixture_form(&world));
     check_world(&rec.world).unwrap();
 }
 

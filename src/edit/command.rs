@@ -15,6 +15,7 @@
 
 pub mod bounded;
 mod face_list;
+pub mod packed;
 
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
@@ -27,7 +28,12 @@ pub use face_list::FaceList;
 
 /// The version of the serde form of [`Edit`](super::Edit) and its commands that this
 /// build writes (and, with every earlier one, reads).
-pub const FORMAT: u32 = 1;
+///
+/// Version 2 packs the geometry of the edits that carry computed polygons
+/// ([`ImportedBody`], [`BooleanPiece`], [`PerceivedPiece`]) into base64 strings (see
+/// [`packed`]); version 1 wrote it as JSON lists, which still reads. Every other
+/// command's form is that of version 1.
+pub const FORMAT: u32 = 2;
 
 /// The most faces a body made by one edit may have: the model's own limit, which a
 /// boolean's result is held to as well.
@@ -158,9 +164,11 @@ fn one() -> f64 {
 /// again.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct BooleanPiece {
-    /// Vertex loci.
+    /// Vertex loci ([packed](packed)).
+    #[serde(with = "packed::loci")]
     pub positions: Vec<DVec3>,
-    /// Faces as vertex indices.
+    /// Faces as vertex indices ([packed](packed)).
+    #[serde(with = "packed::faces")]
     pub faces: FaceList,
 }
 
@@ -181,9 +189,11 @@ pub struct PerceivedPiece {
     #[serde(default)]
     pub outline_px: f64,
     /// Vertex loci: world coordinates for a new body (placed under the world with the
-    /// identity pose), the body's own frame for one carved again.
+    /// identity pose), the body's own frame for one carved again ([packed](packed)).
+    #[serde(with = "packed::loci")]
     pub positions: Vec<DVec3>,
-    /// Faces as vertex indices, counter-clockwise seen from outside.
+    /// Faces as vertex indices, counter-clockwise seen from outside ([packed](packed)).
+    #[serde(with = "packed::faces")]
     pub faces: FaceList,
     /// What made each face.
     pub makers: Vec<Maker>,
@@ -209,9 +219,11 @@ pub struct ImportedBody {
     /// Material colour (`None`: one chosen from the body's id).
     #[serde(default, with = "hex::maybe", skip_serializing_if = "Option::is_none")]
     pub color: Option<Color>,
-    /// Vertex loci in the body's frame, meters.
+    /// Vertex loci in the body's frame, meters ([packed](packed)).
+    #[serde(with = "packed::loci")]
     pub vertices: Vec<DVec3>,
-    /// Faces as vertex indices, counter-clockwise seen from outside.
+    /// Faces as vertex indices, counter-clockwise seen from outside ([packed](packed)).
+    #[serde(with = "packed::faces")]
     pub faces: FaceList,
 }
 

@@ -6,7 +6,13 @@
 //! ```
 //!
 //! `edit` is the JSON of a [`Edit`](crate::edit::Edit), so the journal reads in the `sqlite3` shell:
-//! `SELECT revision, edit FROM journal ORDER BY revision DESC LIMIT 10;`.
+//! `SELECT revision, edit FROM journal ORDER BY revision DESC LIMIT 10;`. The geometry of
+//! an import, a boolean's result and perception's carvings is packed in base64 inside
+//! that JSON (see [`crate::edit::command::packed`]).
+//!
+//! Versions: 1 wrote that geometry as JSON lists; 2 packs it. This build reads both and
+//! marks a journal of version 1 as version 2 with its first append, so that an older
+//! build refuses it at open instead of failing on a packed entry while it replays.
 //!
 //! A batch of entries is one transaction (group commit): after [`Journal::append`]
 //! returns `Ok` every entry is durable (with [`Durability::Full`]), and if it fails none
@@ -24,7 +30,7 @@ use super::{Durability, StoreOptions};
 /// The journal format this build writes and the newest it reads: the tables above, each
 /// entry's edit in the serde form of the edit language's version
 /// [`crate::edit::command::FORMAT`]. A new form of either is a new version.
-pub const FORMAT_VERSION: i64 = 1;
+pub const FORMAT_VERSION: i64 = 2;
 const _: () = assert!(
     FORMAT_VERSION == crate::edit::command::FORMAT as i64,
     "the journal's version names the edits' serde form"
@@ -48,6 +54,9 @@ pub(crate) struct Journal {
     /// The revision the next append must start with, once known (after recovery or
     /// an append).
     next: Option<u64>,
+    /// The format version the file declares; raised to [`FORMAT_VERSION`] by the first
+    /// append.
+    version: i64,
 }
 
 impl Journal {
@@ -80,7 +89,7 @@ impl Journal {
         };
         conn.pragma_update(None, "synchronous", sync)
             .map_err(sql("setting synchronous"))?;
-        init_schema(&conn, path)?;
+        let version = init_schema(&conn, path)?;
         // Two queries: SQLite answers a lone min() or max() from the key's b-tree in
         // O(log n), but scans the whole table for both at once.
         let end = |q| {
@@ -97,6 +106,7 @@ impl Journal {
             first,
             last,
             next: last.map(|r| r + 1),
+            version,
         })
     }
 
@@ -180,6 +190,14 @@ impl Journal {
                 found: first,
             });
         }
+        if self.version < FORMAT_VERSION {
+            // This build writes entries of its own version from here on.
+            tx.execute(
+                "UPDATE meta SET value = ?1 WHERE key = 'format_version'",
+                [FORMAT_VERSION],
+            )
+            .map_err(sql("raising the format version"))?;
+        }
         {
             let mut insert = tx
                 .prepare_cached("INSERT INTO journal(revision, edit, change) VALUES (?1, ?2, ?3)")
@@ -198,6 +216,7 @@ impl Journal {
             }
         }
         tx.commit().map_err(sql("committing an append"))?;
+        self.version = FORMAT_VERSION;
         self.first = self.first.or(Some(first));
         self.last = Some(last);
         self.next = Some(last + 1);
@@ -328,9 +347,9 @@ pub(crate) fn read_after(
     Ok(())
 }
 
-/// Checks that the database is empty (`Ok(true)`) or a journal in a format this build
-/// reads (`Ok(false)`).
-fn inspect(conn: &Connection, path: &Path) -> Result<bool, StoreError> {
+/// Checks that the database is empty (`Ok(None)`) or a journal in a format this build
+/// reads (`Ok(Some(version))`).
+fn inspect(conn: &Connection, path: &Path) -> Result<Option<i64>, StoreError> {
     let sql = |what| move |e| sqlite_error(path, what, e);
     let not_journal = |reason: &str| StoreError::NotAJournal {
         path: path.to_owned(),
@@ -348,7 +367,7 @@ fn inspect(conn: &Connection, path: &Path) -> Result<bool, StoreError> {
             .map_err(sql("reading the schema"))?
     };
     if tables.is_empty() {
-        return Ok(true);
+        return Ok(None);
     }
     if !tables.iter().any(|t| t == "meta") {
         return Err(not_journal("it has tables but no meta table"));
@@ -372,19 +391,20 @@ fn inspect(conn: &Connection, path: &Path) -> Result<bool, StoreError> {
         Some(_) if !tables.iter().any(|t| t == "journal") => {
             Err(not_journal("it has no journal table"))
         }
-        Some(_) => Ok(false),
+        Some(v) => Ok(Some(v)),
     }
 }
 
 /// Creates the tables in an empty database, or checks that an existing one is a
 /// journal in a format this build reads, in one write transaction (so two processes
-/// creating the same journal do not both create it).
-fn init_schema(conn: &Connection, path: &Path) -> Result<(), StoreError> {
+/// creating the same journal do not both create it). Returns the format version the
+/// file declares.
+fn init_schema(conn: &Connection, path: &Path) -> Result<i64, StoreError> {
     let sql = |what| move |e| sqlite_error(path, what, e);
     conn.execute_batch("BEGIN IMMEDIATE")
         .map_err(sql("opening"))?;
-    let result = inspect(conn, path).and_then(|empty| {
-        if empty {
+    let result = inspect(conn, path).and_then(|version| {
+        if version.is_none() {
             conn.execute_batch(
                 "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);
                  CREATE TABLE journal(revision INTEGER PRIMARY KEY, edit TEXT NOT NULL, change TEXT);",
@@ -396,7 +416,7 @@ fn init_schema(conn: &Connection, path: &Path) -> Result<(), StoreError> {
             )
             .map_err(sql("creating the tables"))?;
         }
-        Ok(())
+        Ok(version.unwrap_or(FORMAT_VERSION))
     });
     let end = if result.is_ok() { "COMMIT" } else { "ROLLBACK" };
     conn.execute_batch(end).map_err(sql("opening"))?;

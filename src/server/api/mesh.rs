@@ -37,12 +37,14 @@ pub(super) async fn create(h: &Handle, req: MeshCreate, expected: Option<u64>) -
         .map_err(Problem::bad_request)?;
     let format = req.shape.format;
     let data = req.shape.data;
+    let size = data.len() / 4 * 3;
     let place = Place {
         name: req.name,
         parent: req.parent,
         pose: req.pose,
         color: req.color,
     };
+    let started = std::time::Instant::now();
     let imported = off_the_owner(move || {
         let bytes = base64::engine::general_purpose::STANDARD
             .decode(data.trim())
@@ -51,8 +53,9 @@ pub(super) async fn create(h: &Handle, req: MeshCreate, expected: Option<u64>) -
         drop(data);
         crate::mesh::import(format, &bytes, &options).map_err(import_problem)
     })
-    .await?;
-    place_bodies(h, imported, place, expected).await
+    .await;
+    let imported = logged(format, size, started, imported)?;
+    place_bodies(h, imported, place, expected, started).await
 }
 
 /// `POST /v1/bodies/import`'s query (its fields listed, not flattened: the query
@@ -110,17 +113,49 @@ pub(super) async fn import(State(h): State<Handle>, req: Request) -> Answer {
     };
     let options = options.to_import().map_err(Problem::bad_request)?;
     let format = q.format;
+    let size = bytes.len();
+    let started = std::time::Instant::now();
     let imported = off_the_owner(move || {
         crate::mesh::import(format, &bytes, &options).map_err(import_problem)
     })
-    .await?;
+    .await;
+    let imported = logged(format, size, started, imported)?;
     let place = Place {
         name: q.name,
         parent: q.parent,
         pose: None,
         color: q.color.map(|c| c.0),
     };
-    place_bodies(&h, imported, place, expected).await
+    place_bodies(&h, imported, place, expected, started).await
+}
+
+/// Logs how reading and building a file of `size` bytes ended, `started` being when it
+/// began.
+fn logged(
+    format: Format,
+    size: usize,
+    started: std::time::Instant,
+    imported: Result<Imported, Problem>,
+) -> Result<Imported, Problem> {
+    let elapsed_ms = started.elapsed().as_secs_f64() * 1e3;
+    match &imported {
+        Ok(i) => tracing::info!(
+            format = ?format,
+            bytes = size,
+            bodies = i.bodies.len(),
+            faces = i.bodies.iter().map(|b| b.faces.len()).sum::<usize>(),
+            elapsed_ms,
+            "mesh read and built"
+        ),
+        Err(p) => tracing::info!(
+            format = ?format,
+            bytes = size,
+            elapsed_ms,
+            problem = %p.detail,
+            "mesh refused"
+        ),
+    }
+    imported
 }
 
 /// Runs `work` on a blocking thread.
@@ -180,6 +215,7 @@ async fn place_bodies(
     imported: Imported,
     place: Place,
     expected: Option<u64>,
+    started: std::time::Instant,
 ) -> Answer {
     let Imported { bodies, built } = imported;
     let mut edits = Vec::with_capacity(bodies.len());
@@ -211,7 +247,14 @@ async fn place_bodies(
         });
     }
     let planned = crate::edit::plan_import(edits, built).map_err(Problem::internal)?;
+    let placing = std::time::Instant::now();
     let Applied { outcome, revision } = h.apply_planned_if(planned, expected).await?;
+    tracing::info!(
+        revision,
+        placed_ms = placing.elapsed().as_secs_f64() * 1e3,
+        total_ms = started.elapsed().as_secs_f64() * 1e3,
+        "mesh import placed"
+    );
     let placed = outcome.pieces.unwrap_or_default();
     let snapshot = snapshot(h).await.ok();
     let bodies: Vec<ImportedDto> = placed
