@@ -372,8 +372,9 @@ fn pieces(
     }
     let mut out = Vec::with_capacity(count);
     for faces in &members {
-        // 7–8. Crossings and merging, side by side: both only read the surface.
-        let (crossed, (polygons, unmerged)) = rayon::join(
+        // 7–9. The crossing test beside merging and building: all three only read the
+        // surface, and the build is kept only if nothing crosses.
+        let (crossed, built) = rayon::join(
             || {
                 if options.check_crossings {
                     check_crossings(&s, faces)
@@ -382,30 +383,31 @@ fn pieces(
                 }
             },
             || {
-                if options.merge_coplanar {
-                    merge(&s, faces, options.coplanar_tolerance)
+                let (polygons, unmerged) = if options.merge_coplanar {
+                    let (polygons, unmerged) = merge(&s, faces, options.coplanar_tolerance);
+                    (
+                        drop_collinear(&s, polygons, options.coplanar_tolerance),
+                        unmerged,
+                    )
                 } else {
                     (faces.iter().map(|&f| Ring::Face(f)).collect(), 0)
+                };
+                lap("faces merged");
+                if polygons.len() > options.max_faces {
+                    return Err(ImportError::TooLarge {
+                        what: "faces in one body",
+                        count: polygons.len() as u64,
+                        limit: options.max_faces as u64,
+                    });
                 }
+                let built = build(&s, faces, &polygons, unmerged);
+                lap("built");
+                built
             },
         );
         crossed?;
-        let polygons = if options.merge_coplanar {
-            drop_collinear(&s, polygons, options.coplanar_tolerance)
-        } else {
-            polygons
-        };
-        lap("crossings checked and faces merged");
-        // 9. Build.
-        if polygons.len() > options.max_faces {
-            return Err(ImportError::TooLarge {
-                what: "faces in one body",
-                count: polygons.len() as u64,
-                limit: options.max_faces as u64,
-            });
-        }
-        out.push(build(&s, faces, &polygons, unmerged)?);
-        lap("built");
+        lap("crossings checked");
+        out.push(built?);
     }
     Ok(out)
 }
