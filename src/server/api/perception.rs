@@ -41,16 +41,16 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::appearance::CameraRef;
-use super::body::{Bodies, from_json};
+use super::body::Bodies;
 use super::camera_solution::solve_problem;
-use super::precondition::etag;
+use super::precondition::{FIELD, IfMatch, etag, read_write};
 use super::{Answer, AppState, snapshot};
 use crate::edit::command::{FaceList, PerceivedPiece};
 use crate::edit::{Edit, Outcome};
 use crate::model::camera::Camera;
 use crate::model::perceived::Maker;
 use crate::model::{BodyId, Serial, World};
-use crate::server::actor::Applied;
+use crate::server::actor::{Applied, WriteError};
 use crate::server::limits::{ImageLimits, decode_depth_png, decode_png};
 use crate::server::problem::Problem;
 use crate::vision::image::{Luma, Mask};
@@ -360,9 +360,29 @@ fn run(
 /// `POST /v1/perception`.
 pub(super) async fn perception(State(state): State<AppState>, req: Request) -> Answer {
     let started = Instant::now();
-    let req: PerceptionReq = Bodies::of(&req)?.parse(req, from_json).await?;
+    // Refused before the body is read: the connection cannot be reused.
+    let IfMatch(header) = IfMatch::from_headers(req.headers()).map_err(Problem::unread)?;
+    let (req, field): (PerceptionReq, _) = Bodies::of(&req)?.parse(req, read_write).await?;
+    let precondition = match (header, field) {
+        (Some(h), Some(f)) if h != f => {
+            return Err(Problem::bad_request(format!(
+                "If-Match names revision {h} but {FIELD} is {f}"
+            )));
+        }
+        (h, f) => h.or(f),
+    };
     let options = req.options()?;
     let world = snapshot(&state.handle).await?;
+    // The views are carved against this snapshot: a precondition names it or fails now.
+    if let Some(expected) = precondition
+        && expected != world.revision()
+    {
+        return Err(WriteError::Conflict {
+            expected,
+            actual: world.revision(),
+        }
+        .into());
+    }
     let cameras = req
         .views
         .iter()
@@ -415,7 +435,7 @@ pub(super) async fn perception(State(state): State<AppState>, req: Request) -> A
         .and_then(|(b, _)| world.perceived(b))
         .map_or(0.0, |p| p.outline_px);
     let outline_px = (options.tolerance_px + SIMPLIFY_PX).max(earlier_outline);
-    let (edit, expected) = edit_of(
+    let (edit, carving) = edit_of(
         &world,
         &carved.pieces,
         existing,
@@ -425,7 +445,10 @@ pub(super) async fn perception(State(state): State<AppState>, req: Request) -> A
     )?;
     let Applied {
         revision, outcome, ..
-    } = state.handle.apply_if(edit.clone(), expected).await?;
+    } = state
+        .handle
+        .apply_if(edit.clone(), precondition.or(carving))
+        .await?;
     let carved_name = existing.and_then(|(b, _)| world.node(b).and_then(|n| n.name.clone()));
     let answer = answer_of(&edit, &outcome, revision, &carved, carved_name, started);
     tracing::info!(

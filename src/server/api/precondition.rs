@@ -107,7 +107,7 @@ where
 }
 
 /// A write body: `T` and the `expected_revision` field, if given.
-fn read_write<T: DeserializeOwned>(bytes: &[u8]) -> Result<(T, Option<u64>), Problem> {
+pub(super) fn read_write<T: DeserializeOwned>(bytes: &[u8]) -> Result<(T, Option<u64>), Problem> {
     // Most writes carry no precondition field: read them straight into `T`.
     if memchr::memmem::find(bytes, FIELD.as_bytes()).is_some() {
         from_json::<WithRevision<T>>(bytes).map(|w| (w.value, w.revision))
