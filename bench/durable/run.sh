@@ -35,6 +35,9 @@ trap cleanup EXIT
 # start_server NAME: starts the server on the data directory, logging to NAME.log.
 start_server() {
     log="$work/$1.log"
+    # The redirection below happens in the background job: an old file could still
+    # show the previous server's address to the loop.
+    rm -f "$log"
     RUST_LOG=warn,winged=info target/release/winged serve --addr 127.0.0.1:0 \
         --data "$work/data" --durability "$DURABILITY" >"$log" 2>&1 &
     pid=$!

@@ -39,6 +39,9 @@ trap cleanup EXIT
 # file; sets pid and url.
 start_server() {
     local log="$logdir/server-${1//[^a-z]/_}.log"
+    # The redirection below happens in the background job: an old file could still
+    # show the previous server's address to the loop.
+    rm -f "$log"
     RUST_LOG="$1" target/release/winged serve --memory --demo --addr 127.0.0.1:0 >"$log" 2>&1 &
     pid=$!
     local bound=""

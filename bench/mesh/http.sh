@@ -28,9 +28,12 @@ cleanup() {
 trap cleanup EXIT
 
 # start MODE: a server on 127.0.0.1:0, in memory (MODE=memory) or journaling into a
-# new directory (MODE=journal); sets pid and url.
+# new directory (MODE=journal); sets pid, url and log.
 start() {
-    local log="$work/server.log" storage
+    # A new file per server: the redirection below happens in the background job, so
+    # a reused file could still show the previous server's address to the loop.
+    local storage
+    log=$(mktemp -p "$work" server.XXXXXX.log)
     if [ "$1" = memory ]; then storage=(--memory); else
         rm -rf "$work/data"
         storage=(--data "$work/data")
@@ -63,9 +66,13 @@ for mode in memory journal; do
     for file in sphere-1m grid-box-1m; do
         for _ in $(seq 1 "$REPEAT"); do
             start "$mode"
-            out=$(curl -sS -o "$work/answer.json" -w '%{time_total} %{http_code}' \
+            if ! out=$(curl -sS -o "$work/answer.json" -w '%{time_total} %{http_code}' \
                 --data-binary "@$DIR/$file.stl" \
-                "$url/v1/bodies/import?format=stl&name=$file")
+                "$url/v1/bodies/import?format=stl&name=$file"); then
+                echo "bench/mesh/http.sh: the request failed; the server's log:" >&2
+                cat "$log" >&2
+                exit 1
+            fi
             stop
             printf '%-8s %-16s %s\n' "$mode" "$file" "$out"
         done
