@@ -20,7 +20,7 @@ requirements=(
     "httpx==0.28.1" "numpy==2.4.6" "pillow==13.0.0"
     "pytest==9.2.0" "pytest-asyncio==1.5.0" "selenium==4.51.0"
 )
-stamp="${requirements[*]} $(cat clients/python/pyproject.toml 2>/dev/null | sha256sum | cut -c1-16)"
+stamp="${requirements[*]} $( (cat clients/python/pyproject.toml 2>/dev/null || true) | sha256sum | cut -c1-16)"
 if [ ! -x "$venv/bin/python" ] || [ "$(cat "$venv/.winged-stamp" 2>/dev/null)" != "$stamp" ]; then
     echo "clients/setup.sh: installing the Python test environment into $venv" >&2
     python3 -m venv "$venv"

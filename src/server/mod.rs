@@ -26,6 +26,7 @@ pub mod metrics;
 pub mod problem;
 pub mod request;
 pub mod spec;
+pub mod viewer;
 
 use std::net::SocketAddr;
 use std::sync::Arc;

@@ -83,7 +83,8 @@ fn guarded(r: MethodRouter<AppState>, tokens: &Arc<Tokens>, need: Role) -> Metho
 
 /// The router over a running owner and its change feed.
 ///
-/// Unguarded: `/healthz`, `/readyz`, `/openapi.json`. Everything else needs a token
+/// Unguarded: `/healthz`, `/readyz`, `/openapi.json`, and the viewer (`/` and
+/// `/viewer/{file}`: the page asks for a token itself). Everything else needs a token
 /// (when tokens are configured) of the role its marker names: [`Role::Read`] for
 /// `reads`, [`Role::Write`] for `writes`, [`Role::Admin`] for `admin`.
 pub fn router(state: AppState, max_request_bytes: usize) -> Router {
@@ -96,6 +97,8 @@ pub fn router(state: AppState, max_request_bytes: usize) -> Router {
         .route("/healthz", get(ops::healthz))
         .route("/readyz", get(ops::readyz))
         .route("/openapi.json", get(ops::openapi))
+        .route("/", get(crate::server::viewer::index))
+        .route("/viewer/{file}", get(crate::server::viewer::asset))
         .route("/metrics", reads(get(ops::metrics)))
         .route("/v1/admin/snapshot", admin(post(ops::snapshot_now)))
         .route("/v1/world", reads(get(world)))
