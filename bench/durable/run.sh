@@ -11,6 +11,7 @@
 # Needs wrk (Debian: apt-get install -y wrk).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source bench/server.sh
 
 SECS="${SECONDS_PER_RUN:-10}"
 DURABILITY="${DURABILITY:-full}"
@@ -35,20 +36,9 @@ trap cleanup EXIT
 # start_server NAME: starts the server on the data directory, logging to NAME.log.
 start_server() {
     log="$work/$1.log"
-    # The redirection below happens in the background job: an old file could still
-    # show the previous server's address to the loop.
-    rm -f "$log"
-    RUST_LOG=warn,winged=info target/release/winged serve --addr 127.0.0.1:0 \
-        --data "$work/data" --durability "$DURABILITY" >"$log" 2>&1 &
-    pid=$!
-    local bound=""
-    for _ in $(seq 1 600); do
-        bound=$(grep -ao 'bound=[0-9.:]*' "$log" | head -1 | cut -d= -f2 || true)
-        [ -n "$bound" ] && break
-        sleep 0.1
-    done
-    [ -n "$bound" ] || { cat "$log" >&2; exit 1; }
-    url="http://$bound"
+    WAIT_TRIES=600 start_winged "$log" env RUST_LOG=warn,winged=info \
+        target/release/winged serve --addr 127.0.0.1:0 \
+        --data "$work/data" --durability "$DURABILITY"
 }
 
 start_server first

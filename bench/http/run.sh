@@ -12,6 +12,7 @@
 # server and the latency clients share its cores.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source bench/server.sh
 
 SECS="${SECONDS_PER_RUN:-10}"
 LATENCY_SECS="${LATENCY_SECONDS:-20}"
@@ -38,24 +39,8 @@ trap cleanup EXIT
 # start_server RUST_LOG: starts `winged serve --demo` on 127.0.0.1:0, logging to a
 # file; sets pid and url.
 start_server() {
-    local log="$logdir/server-${1//[^a-z]/_}.log"
-    # The redirection below happens in the background job: an old file could still
-    # show the previous server's address to the loop.
-    rm -f "$log"
-    RUST_LOG="$1" target/release/winged serve --memory --demo --addr 127.0.0.1:0 >"$log" 2>&1 &
-    pid=$!
-    local bound=""
-    for _ in $(seq 1 100); do
-        bound=$(grep -ao 'bound=[0-9.:]*' "$log" | head -1 | cut -d= -f2 || true)
-        [ -n "$bound" ] && break
-        sleep 0.1
-    done
-    if [ -z "$bound" ]; then
-        echo "bench/http/run.sh: the server did not start:" >&2
-        cat "$log" >&2
-        exit 1
-    fi
-    url="http://$bound"
+    start_winged "$logdir/server-${1//[^a-z]/_}.log" \
+        env RUST_LOG="$1" target/release/winged serve --memory --demo --addr 127.0.0.1:0
     echo "== server pid $pid at $url, RUST_LOG=$1"
 }
 

@@ -15,6 +15,7 @@
 # Everything runs on this machine: wrk, curl and the server share its cores.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source bench/server.sh
 
 SECS="${SECONDS_PER_RUN:-10}"
 THREADS="${WRK_THREADS:-2}"
@@ -48,20 +49,8 @@ trap cleanup EXIT
 log="$logdir/server.log"
 # winged's own lines (the index build among them, and each sync of the index), not one
 # line per request.
-RUST_LOG="warn,winged=info,winged::server::api::spatial=debug" "$bin" serve --memory --addr 127.0.0.1:0 >"$log" 2>&1 &
-pid=$!
-bound=""
-for _ in $(seq 1 100); do
-    bound=$(grep -ao 'bound=[0-9.:]*' "$log" | head -1 | cut -d= -f2 || true)
-    [ -n "$bound" ] && break
-    sleep 0.1
-done
-if [ -z "$bound" ]; then
-    echo "bench/http/spatial.sh: the server did not start:" >&2
-    cat "$log" >&2
-    exit 1
-fi
-url="http://$bound"
+start_winged "$log" env RUST_LOG="warn,winged=info,winged::server::api::spatial=debug" \
+    "$bin" serve --memory --addr 127.0.0.1:0
 echo "== $(nproc) cores; load average: $(cut -d' ' -f1-3 /proc/loadavg); server pid $pid at $url"
 
 # The city: SIDE × SIDE boxes on a PITCH grid, footprints 8–16 m, heights 6–60 m

@@ -8,6 +8,7 @@
 #                                   # when missing; default /tmp/mesh-side); REPEAT (3)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source bench/server.sh
 DIR=${1:-/tmp/mesh-side}
 REPEAT=${REPEAT:-3}
 target=${CARGO_TARGET_DIR:-target}
@@ -30,29 +31,14 @@ trap cleanup EXIT
 # start MODE: a server on 127.0.0.1:0, in memory (MODE=memory) or journaling into a
 # new directory (MODE=journal); sets pid, url and log.
 start() {
-    # A new file per server: the redirection below happens in the background job, so
-    # a reused file could still show the previous server's address to the loop.
     local storage
-    log=$(mktemp -p "$work" server.XXXXXX.log)
+    log="$work/server.log"
     if [ "$1" = memory ]; then storage=(--memory); else
         rm -rf "$work/data"
         storage=(--data "$work/data")
     fi
-    RUST_LOG=warn,winged=info "$target/release/winged" serve "${storage[@]}" \
-        --addr 127.0.0.1:0 >"$log" 2>&1 &
-    pid=$!
-    local bound=""
-    for _ in $(seq 1 100); do
-        bound=$(grep -ao 'bound=[0-9.:]*' "$log" | head -1 | cut -d= -f2 || true)
-        [ -n "$bound" ] && break
-        sleep 0.1
-    done
-    if [ -z "$bound" ]; then
-        echo "bench/mesh/http.sh: the server did not start:" >&2
-        cat "$log" >&2
-        exit 1
-    fi
-    url="http://$bound"
+    start_winged "$log" env RUST_LOG=warn,winged=info "$target/release/winged" serve \
+        "${storage[@]}" --addr 127.0.0.1:0
 }
 
 stop() {

@@ -11,6 +11,7 @@
 # The browser, the server and the script share this machine's cores.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+source bench/server.sh
 
 cargo build --release --locked --bin winged
 python=$(bash clients/setup.sh | tail -n 1)
@@ -26,19 +27,7 @@ cleanup() {
 }
 trap cleanup EXIT
 
-RUST_LOG="warn,winged=info" target/release/winged serve --memory --demo --addr 127.0.0.1:0 \
-    >"$logdir/server.log" 2>&1 &
-pid=$!
-bound=""
-for _ in $(seq 1 100); do
-    bound=$(grep -ao 'bound=[0-9.:]*' "$logdir/server.log" | head -1 | cut -d= -f2 || true)
-    [ -n "$bound" ] && break
-    sleep 0.1
-done
-if [ -z "$bound" ]; then
-    echo "bench/viewer/run.sh: the server did not start:" >&2
-    cat "$logdir/server.log" >&2
-    exit 1
-fi
-echo "== server pid $pid at http://$bound; $(nproc) cores; load average $(cut -d' ' -f1-3 /proc/loadavg)"
-"$python" bench/viewer/fps.py "http://$bound" --seconds "${SECONDS_TO_ORBIT:-10}" --mode "${MODE:-shaded}"
+start_winged "$logdir/server.log" env RUST_LOG="warn,winged=info" \
+    target/release/winged serve --memory --demo --addr 127.0.0.1:0
+echo "== server pid $pid at $url; $(nproc) cores; load average $(cut -d' ' -f1-3 /proc/loadavg)"
+"$python" bench/viewer/fps.py "$url" --seconds "${SECONDS_TO_ORBIT:-10}" --mode "${MODE:-shaded}"

@@ -26,6 +26,33 @@ from .requests import encode_image
 class VisionOperations(Base):
     """Cameras, lights, appearance, camera solution, recognition and perception."""
 
+    # ----- the named registers: cameras and lights alike ---------------------------------
+
+    def _put_named(self, register: str, name: str, value: Any, expected_revision: int | None) -> RevisionOnly:
+        """``PUT /v1/{register}/{name}``: store ``value`` under ``name``."""
+        return self._run(
+            Call(
+                "PUT",
+                f"/v1/{register}/{path_segment(name)}",
+                model_reader(RevisionOnly),
+                json=to_json(value),
+                headers=if_match(expected_revision),
+                write=True,
+            )
+        )
+
+    def _delete_named(self, register: str, name: str, expected_revision: int | None) -> RevisionOnly:
+        """``DELETE /v1/{register}/{name}``: remove what is stored under ``name``."""
+        return self._run(
+            Call(
+                "DELETE",
+                f"/v1/{register}/{path_segment(name)}",
+                model_reader(RevisionOnly),
+                headers=if_match(expected_revision),
+                write=True,
+            )
+        )
+
     # ----- cameras ---------------------------------------------------------------------
 
     def list_cameras(self) -> CameraList:
@@ -38,28 +65,11 @@ class VisionOperations(Base):
 
     def put_camera(self, name: str, camera: Any, *, expected_revision: int | None = None) -> RevisionOnly:
         """``PUT /v1/cameras/{name}``: store a camera (a :class:`~winged.CameraSpec` or dict)."""
-        return self._run(
-            Call(
-                "PUT",
-                f"/v1/cameras/{path_segment(name)}",
-                model_reader(RevisionOnly),
-                json=to_json(camera),
-                headers=if_match(expected_revision),
-                write=True,
-            )
-        )
+        return self._put_named("cameras", name, camera, expected_revision)
 
     def delete_camera(self, name: str, *, expected_revision: int | None = None) -> RevisionOnly:
         """``DELETE /v1/cameras/{name}``: remove a camera."""
-        return self._run(
-            Call(
-                "DELETE",
-                f"/v1/cameras/{path_segment(name)}",
-                model_reader(RevisionOnly),
-                headers=if_match(expected_revision),
-                write=True,
-            )
-        )
+        return self._delete_named("cameras", name, expected_revision)
 
     # ----- appearance ------------------------------------------------------------------
 
@@ -309,25 +319,8 @@ class VisionOperations(Base):
 
     def put_light(self, name: str, light: Any, *, expected_revision: int | None = None) -> RevisionOnly:
         """``PUT /v1/lights/{name}``: store a light (:class:`~winged.Sun`, :class:`~winged.PointLamp` or dict)."""
-        return self._run(
-            Call(
-                "PUT",
-                f"/v1/lights/{path_segment(name)}",
-                model_reader(RevisionOnly),
-                json=to_json(light),
-                headers=if_match(expected_revision),
-                write=True,
-            )
-        )
+        return self._put_named("lights", name, light, expected_revision)
 
     def delete_light(self, name: str, *, expected_revision: int | None = None) -> RevisionOnly:
         """``DELETE /v1/lights/{name}``: remove a light."""
-        return self._run(
-            Call(
-                "DELETE",
-                f"/v1/lights/{path_segment(name)}",
-                model_reader(RevisionOnly),
-                headers=if_match(expected_revision),
-                write=True,
-            )
-        )
+        return self._delete_named("lights", name, expected_revision)
